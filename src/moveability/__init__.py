@@ -1,0 +1,52 @@
+"""moveability: regions of feasible point-to-point motions of fully-parallel manipulators.
+
+The spaces of the analysis (the Cartesian workspace, the joint space and their
+product) are represented by :class:`HyperTree`, a k-dimensional generalized
+octree whose leaves are IN, OUT or BOUNDARY.
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from .errors import (
+    IncompatibleTreesError,
+    InvalidParameterError,
+    MoveabilityError,
+    ResolutionError,
+)
+from .measurement import leaf_volumes, locate, measure
+from .projection import project
+from .setops import complement, difference, equals, intersection, union
+from .status import BOUNDARY, IN, OUT, Status
+from .topology import adjacency, components
+from .tree import HyperTree, Leaves, load
+
+try:
+    __version__ = version("moveability")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree
+    __version__ = "0.0.0"
+
+__all__ = [
+    "BOUNDARY",
+    "IN",
+    "OUT",
+    "HyperTree",
+    "IncompatibleTreesError",
+    "InvalidParameterError",
+    "Leaves",
+    "MoveabilityError",
+    "ResolutionError",
+    "Status",
+    "__version__",
+    "adjacency",
+    "complement",
+    "components",
+    "difference",
+    "equals",
+    "intersection",
+    "leaf_volumes",
+    "load",
+    "locate",
+    "measure",
+    "project",
+    "union",
+]
