@@ -591,7 +591,13 @@ def _to_coordinates(
     Every cell face is computed from the same integer by the same expression,
     so adjacent cells share their faces exactly.
     """
-    res = np.exp2(np.asarray(layout.max_depth, dtype=np.float64))
-    frac = np.asarray(ints, dtype=np.float64) / res
-    x = lo + (hi - lo) * frac
-    return np.where(frac >= 1.0, hi, x)
+    inv_res = np.exp2(-np.asarray(layout.max_depth, dtype=np.float64))
+    # (hi - lo) * inv_res is exact (a power-of-two scaling), so each coordinate
+    # is one rounding of the exact value
+    x = np.array(ints, dtype=np.float64)
+    x *= (hi - lo) * inv_res
+    x += lo
+    top = ints >= np.left_shift(1, np.asarray(layout.max_depth, dtype=np.int64))
+    if top.any():
+        x[top] = np.broadcast_to(hi, x.shape)[top]
+    return x

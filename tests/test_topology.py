@@ -1,0 +1,68 @@
+"""Components from the compiled kernel against the numpy adjacency and scipy."""
+
+import numpy as np
+import pytest
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from moveability import BOUNDARY, IN, OUT, HyperTree, adjacency, components
+
+
+def _by_graph(tree, status, connectivity):
+    """Components from the numpy adjacency pairs, by scipy's graph labelling."""
+    chosen = np.isin(tree.status, [s for s in (IN, OUT, BOUNDARY) if s & status])
+    pairs = adjacency(tree, status=status, connectivity=connectivity)
+    n = len(tree)
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, raw = connected_components(graph, directed=False)
+    labels = np.where(chosen, raw, -1)
+    return labels, len(np.unique(raw[chosen]))
+
+
+def _same_partition(a, b):
+    taken = a >= 0
+    np.testing.assert_array_equal(taken, b >= 0)
+    pairs = np.unique(np.stack([a[taken], b[taken]], axis=1), axis=0)
+    assert len(np.unique(pairs[:, 0])) == len(pairs) == len(np.unique(pairs[:, 1]))
+
+
+def _random_tree(rng, shape, periodic):
+    values = rng.choice([IN, OUT, BOUNDARY], size=shape, p=[0.45, 0.4, 0.15])
+    # blocks of equal statuses give leaves at mixed levels
+    coarse = rng.choice([IN, OUT], size=tuple(max(s // 4, 1) for s in shape))
+    block = np.kron(coarse, np.ones(tuple(min(s, 4) for s in shape), dtype=int))
+    values = np.where(rng.random(shape) < 0.5, block, values)
+    return HyperTree.from_array(values.astype(np.uint8), periodic=periodic)
+
+
+@pytest.mark.parametrize(
+    ("shape", "periodic"),
+    [((16, 32), ()), ((16, 8), (0,)), ((8, 8, 8), (1,)), ((4, 8, 4, 8), (0, 3)), ((2, 4), (0, 1))],
+)
+@pytest.mark.parametrize("status", [IN, IN | BOUNDARY, OUT])
+def test_kernel_matches_graph_labelling(shape, periodic, status):
+    rng = np.random.default_rng(sum(shape) + len(periodic) + int(status))
+    for _ in range(3):
+        tree = _random_tree(rng, shape, periodic)
+        assert len(np.unique(tree.levels)) > 1
+        for c in range(1, len(shape) + 1):
+            labels, count = components(tree, status=status, connectivity=c)
+            ref, ref_count = _by_graph(tree, status, c)
+            assert count == ref_count
+            _same_partition(labels, ref)
+
+
+def test_labels_are_numbered_by_first_leaf():
+    rng = np.random.default_rng(3)
+    tree = _random_tree(rng, (16, 16), ())
+    labels, count = components(tree, status=IN | BOUNDARY)
+    firsts = [int(np.flatnonzero(labels == i)[0]) for i in range(count)]
+    assert firsts == sorted(firsts)
+    assert set(labels[labels >= 0].tolist()) == set(range(count))
+
+
+def test_empty_selection_has_no_component():
+    tree = HyperTree.from_array(np.zeros((4, 4), dtype=bool))
+    labels, count = components(tree)
+    assert count == 0
+    assert (labels == -1).all()
