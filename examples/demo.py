@@ -32,7 +32,7 @@ def cut_annulus(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
 
 def main() -> None:
     exact = np.pi**2 / 2
-    print("4-D unit ball, volume pi^2/2 = %.5f" % exact)
+    print(f"4-D unit ball, volume pi^2/2 = {exact:.5f}")
     print(
         f"{'depth':>5} {'leaves':>9} {'inner':>9} {'outer':>9} {'disk in':>8} "
         f"{'disk out':>8} {'seconds':>8}"
@@ -47,7 +47,7 @@ def main() -> None:
             f"{depth:>5} {len(tree):>9} {inner:>9.5f} {outer:>9.5f} {disk_in:>8.5f} "
             f"{disk_out:>8.5f} {seconds:>8.3f}"
         )
-    print("projection onto (x0, x1) brackets the unit disk, pi = %.5f" % np.pi)
+    print(f"projection onto (x0, x1) brackets the unit disk, pi = {np.pi:.5f}")
     print()
     print("annulus in polar coordinates (theta, r) minus a strip of theta")
     for periodic in ((), (0,)):

@@ -10,7 +10,7 @@ components on the fly with a union-find, so no edge list is ever stored.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit  # type: ignore[import-untyped]
+from numba import njit
 from numpy.typing import NDArray
 
 from .keys import KeyLayout
