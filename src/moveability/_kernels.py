@@ -147,10 +147,7 @@ def label_leaves(
 ) -> tuple[NDArray[np.int64], int]:
     """Component labels of the chosen leaves (numbered by first leaf), and their count."""
     k = layout.ndim
-    width = max(max(layout.max_depth, default=0), 1)
-    positions = np.zeros((k, width), dtype=np.int64)
-    for axis, pos in enumerate(layout.positions):
-        positions[axis, : len(pos)] = pos
+    positions = layout.position_table
     masks = np.array(layout.masks, dtype=np.uint64)
     periodic_mask = np.zeros(k, dtype=bool)
     periodic_mask[list(periodic)] = True

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from . import _bits
 from .errors import ResolutionError
 
 __all__ = ["MAX_KEY_BITS", "KeyLayout"]
@@ -120,26 +121,24 @@ class KeyLayout:
         return np.left_shift(np.int64(1), md - self.axis_depths(levels))
 
     # -------------------------------------------------------- encode / decode
+    @property
+    def position_table(self) -> NDArray[np.int64]:
+        """``positions`` as a (k, max depth) array (unused entries are 0)."""
+        width = max(max(self.max_depth, default=0), 1)
+        table = np.zeros((self.ndim, width), dtype=np.int64)
+        for axis, pos in enumerate(self.positions):
+            table[axis, : len(pos)] = pos
+        return table
+
     def encode(self, anchors: NDArray[np.integer]) -> NDArray[np.uint64]:
         """Keys of anchors given in finest units, shape (n, k) -> (n,)."""
-        a = np.asarray(anchors).astype(_U64, copy=False)
-        keys = np.zeros(a.shape[0], dtype=_U64)
-        for axis, pos in enumerate(self.positions):
-            col = a[:, axis]
-            for j, p in enumerate(pos):
-                keys |= ((col >> _U64(j)) & _U64(1)) << _U64(p)
-        return keys
+        a = np.ascontiguousarray(anchors, dtype=np.int64).reshape(-1, self.ndim)
+        return _bits.encode(a, self.position_table, np.asarray(self.max_depth, dtype=np.int64))
 
     def decode(self, keys: NDArray[np.uint64]) -> NDArray[np.int64]:
         """Anchors in finest units of the keys, shape (n,) -> (n, k)."""
-        kk = np.asarray(keys, dtype=_U64)
-        out = np.zeros((kk.shape[0], self.ndim), dtype=np.int64)
-        for axis, pos in enumerate(self.positions):
-            col = np.zeros(kk.shape[0], dtype=_U64)
-            for j, p in enumerate(pos):
-                col |= ((kk >> _U64(p)) & _U64(1)) << _U64(j)
-            out[:, axis] = col.astype(np.int64)
-        return out
+        kk = np.ascontiguousarray(keys, dtype=_U64).ravel()
+        return _bits.decode(kk, self.position_table, np.asarray(self.max_depth, dtype=np.int64))
 
     # ------------------------------------------------------------ children
     def child_offsets(self, level: int) -> tuple[NDArray[np.uint64], NDArray[np.int64]]:

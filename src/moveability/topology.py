@@ -116,8 +116,14 @@ def adjacency(
     )
     src, dst = _probe_pairs(tree, np.flatnonzero(chosen), c)
     keep = chosen[dst] & (src != dst)
-    pairs = np.stack([np.minimum(src, dst)[keep], np.maximum(src, dst)[keep]], axis=1)
-    return np.unique(pairs, axis=0).astype(np.intp)
+    lo = np.minimum(src, dst)[keep].astype(np.int64)
+    hi = np.maximum(src, dst)[keep].astype(np.int64)
+    # one integer per pair, so that duplicates go in a 1-D sort
+    n = max(len(tree), 1)
+    packed = np.sort(lo * n + hi)
+    if packed.size:
+        packed = packed[np.r_[True, packed[1:] != packed[:-1]]]
+    return np.stack([packed // n, packed % n], axis=1).astype(np.intp)
 
 
 def components(

@@ -17,6 +17,7 @@ Trees are immutable; every operation returns a new tree.
 from __future__ import annotations
 
 import os
+import zipfile
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any, NamedTuple
 
@@ -529,11 +530,16 @@ def load(path: str | os.PathLike[str]) -> HyperTree:
     True
     """
     try:
-        with np.load(path, allow_pickle=False) as data:
-            fields = {name: data[name] for name in data.files}
+        # open the file here: np.load leaves it open when the archive is corrupt
+        with open(path, "rb") as handle:
+            data = np.load(handle, allow_pickle=False)
+            if not hasattr(data, "files"):  # a .npy array, not an archive
+                raise ValueError("not an .npz archive")
+            with data:
+                fields = {name: data[name] for name in data.files}
     except FileNotFoundError:
         raise InvalidParameterError("path", "an existing .npz file", os.fspath(path)) from None
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
         raise InvalidParameterError(
             "path", "a .npz file written by HyperTree.save", f"{os.fspath(path)} ({exc})"
         ) from None
