@@ -12,11 +12,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import IncompatibleTreesError
+from .errors import IncompatibleTreesError, ResolutionError
 from .keys import KeyLayout
 from .status import AND_TABLE, NOT_TABLE, OR_TABLE
 from .subdivision import merge_siblings
-from .tree import HyperTree
+from .tree import DEFAULT_MAX_LEAVES, HyperTree
 
 __all__ = ["complement", "difference", "equals", "intersection", "overlay", "union"]
 
@@ -52,6 +52,14 @@ def relayout(tree: HyperTree, max_depth: tuple[int, ...]) -> HyperTree:
     # extra bits of depth on each axis at the leaf's own level
     extra = new.axis_depths(levels) - old.axis_depths(levels)
     n_parts = np.left_shift(1, extra.sum(axis=1))
+    total = int(n_parts.sum())
+    if total > DEFAULT_MAX_LEAVES:
+        raise ResolutionError(
+            "other",
+            f"trees whose common refinement has at most {DEFAULT_MAX_LEAVES} cells "
+            f"(per-axis depths {tree.max_depth} in the layout {max_depth} need {total})",
+            tree,
+        )
     owner = np.repeat(np.arange(len(tree)), n_parts)
     # enumerate the sub-cells of each leaf: mixed-radix digits over the axes
     rank = np.arange(owner.size) - np.repeat(np.cumsum(n_parts) - n_parts, n_parts)
