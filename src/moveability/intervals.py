@@ -1,0 +1,248 @@
+"""Interval arithmetic on numpy arrays, with outward rounding.
+
+An :class:`Interval` holds two float arrays ``lo <= hi`` of one shape: an
+array of closed intervals. Every operation returns an enclosure of the exact
+range of the operation over its operands: the numpy result is computed in
+round-to-nearest and then widened outwards, by one unit in the last place for
+the correctly rounded operations (``+ - * /`` and ``sqrt``) and by a few units
+for the library functions (``sin``, ``cos``, ``arccos``, ``arctan2``), whose
+error is below one unit on the platforms numpy supports.
+
+Examples
+--------
+>>> import numpy as np
+>>> from moveability.intervals import Interval, sqrt
+>>> x = Interval(np.array([1.0]), np.array([4.0]))
+>>> r = sqrt(x * x + 1.0)
+>>> bool(r.lo[0] <= np.sqrt(2.0) and np.sqrt(17.0) <= r.hi[0])
+True
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "Interval",
+    "arccos",
+    "arctan2",
+    "cos",
+    "hull",
+    "sin",
+    "sqrt",
+    "square",
+]
+
+Array = NDArray[np.float64]
+_INF = np.inf
+_PI_UP = float(np.nextafter(np.pi, np.inf))
+_TWO_PI = 2.0 * np.pi
+#: ulps added to the results of library functions
+_LIB_ULPS = 4
+
+
+def _down(x: Array, ulps: int = 1) -> Array:
+    for _ in range(ulps):
+        x = np.nextafter(x, -_INF)
+    return x
+
+
+def _up(x: Array, ulps: int = 1) -> Array:
+    for _ in range(ulps):
+        x = np.nextafter(x, _INF)
+    return x
+
+
+@dataclass(frozen=True)
+class Interval:
+    """An array of closed intervals ``[lo, hi]``.
+
+    Parameters
+    ----------
+    lo, hi : array_like
+        Bounds of one shape (broadcast together).
+    """
+
+    lo: Array
+    hi: Array
+
+    def __init__(self, lo: ArrayLike, hi: ArrayLike | None = None) -> None:
+        lo_a = np.asarray(lo, dtype=np.float64)
+        hi_a = lo_a if hi is None else np.asarray(hi, dtype=np.float64)
+        lo_a, hi_a = np.broadcast_arrays(lo_a, hi_a)
+        object.__setattr__(self, "lo", lo_a)
+        object.__setattr__(self, "hi", hi_a)
+
+    # ------------------------------------------------------------------ basics
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(self.lo.shape)
+
+    @property
+    def mid(self) -> Array:
+        """A point inside each interval (the midpoint, rounded)."""
+        m = 0.5 * self.lo + 0.5 * self.hi
+        return np.clip(m, self.lo, self.hi)
+
+    @property
+    def width(self) -> Array:
+        return self.hi - self.lo
+
+    def __getitem__(self, index: Any) -> Interval:
+        return Interval(self.lo[index], self.hi[index])
+
+    def contains(self, x: ArrayLike) -> NDArray[np.bool_]:
+        """Whether each point lies in its interval."""
+        xa = np.asarray(x, dtype=np.float64)
+        return (self.lo <= xa) & (xa <= self.hi)
+
+    def positive(self) -> NDArray[np.bool_]:
+        """Whether every value of each interval is > 0 (certainly positive)."""
+        return self.lo > 0
+
+    def negative(self) -> NDArray[np.bool_]:
+        """Whether every value of each interval is < 0."""
+        return self.hi < 0
+
+    # -------------------------------------------------------------- operators
+    def __neg__(self) -> Interval:
+        return Interval(-self.hi, -self.lo)
+
+    def __add__(self, other: IntervalLike) -> Interval:
+        o = as_interval(other)
+        return Interval(_down(self.lo + o.lo), _up(self.hi + o.hi))
+
+    __radd__ = __add__
+
+    def __sub__(self, other: IntervalLike) -> Interval:
+        o = as_interval(other)
+        return Interval(_down(self.lo - o.hi), _up(self.hi - o.lo))
+
+    def __rsub__(self, other: IntervalLike) -> Interval:
+        return as_interval(other) - self
+
+    def __mul__(self, other: IntervalLike) -> Interval:
+        o = as_interval(other)
+        with np.errstate(invalid="ignore"):
+            products = np.stack([self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi])
+        # 0 * inf is nan: the product of a zero bound is zero
+        products = np.where(np.isnan(products), 0.0, products)
+        return Interval(_down(products.min(axis=0)), _up(products.max(axis=0)))
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, other: IntervalLike) -> Interval:
+        o = as_interval(other)
+        straddles = (o.lo <= 0) & (o.hi >= 0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv_lo = np.where(straddles, -_INF, _down(1.0 / o.hi))
+            inv_hi = np.where(straddles, _INF, _up(1.0 / o.lo))
+        return self * Interval(inv_lo, inv_hi)
+
+
+IntervalLike = Interval | ArrayLike
+
+
+def as_interval(x: IntervalLike) -> Interval:
+    """An interval from an :class:`Interval` or from exact numbers (degenerate intervals)."""
+    if isinstance(x, Interval):
+        return x
+    return Interval(x, x)
+
+
+def hull(a: Interval, b: Interval) -> Interval:
+    """The smallest intervals holding both ``a`` and ``b``."""
+    return Interval(np.minimum(a.lo, b.lo), np.maximum(a.hi, b.hi))
+
+
+def square(x: IntervalLike) -> Interval:
+    """``x ** 2``, tighter than ``x * x`` when ``x`` straddles zero."""
+    x = as_interval(x)
+    a, b = x.lo * x.lo, x.hi * x.hi
+    straddles = (x.lo <= 0) & (x.hi >= 0)
+    lo = np.where(straddles, 0.0, _down(np.minimum(a, b)))
+    return Interval(np.maximum(lo, 0.0), _up(np.maximum(a, b)))
+
+
+def sqrt(x: IntervalLike) -> Interval:
+    """Square root of the non-negative part of each interval (``nan`` where empty)."""
+    x = as_interval(x)
+    with np.errstate(invalid="ignore"):
+        lo = np.where(x.lo <= 0, 0.0, _down(np.sqrt(np.maximum(x.lo, 0.0))))
+        hi = np.where(x.hi < 0, np.nan, _up(np.sqrt(np.maximum(x.hi, 0.0))))
+    return Interval(np.maximum(lo, 0.0), hi)
+
+
+def _contains_point(x: Interval, phase: float) -> NDArray[np.bool_]:
+    """Whether ``[lo, hi]`` may contain a point ``phase + 2 k pi`` (conservative)."""
+    # the first such point at or above lo (computed with a safety margin)
+    k = np.ceil((x.lo - phase) / _TWO_PI - 1e-12)
+    first = phase + k * _TWO_PI
+    return first <= x.hi + 1e-12 * np.maximum(1.0, np.abs(x.hi))
+
+
+def cos(x: IntervalLike) -> Interval:
+    """Cosine: exact range of ``cos`` over each interval, widened outwards."""
+    x = as_interval(x)
+    c_lo, c_hi = np.cos(x.lo), np.cos(x.hi)
+    lo = np.minimum(c_lo, c_hi)
+    hi = np.maximum(c_lo, c_hi)
+    wide = (x.hi - x.lo) >= _TWO_PI
+    has_max = wide | _contains_point(x, 0.0)
+    has_min = wide | _contains_point(x, np.pi)
+    lo = np.where(has_min, -1.0, _down(lo, _LIB_ULPS))
+    hi = np.where(has_max, 1.0, _up(hi, _LIB_ULPS))
+    return Interval(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
+
+
+def sin(x: IntervalLike) -> Interval:
+    """Sine: exact range of ``sin`` over each interval, widened outwards."""
+    x = as_interval(x)
+    s_lo, s_hi = np.sin(x.lo), np.sin(x.hi)
+    lo = np.minimum(s_lo, s_hi)
+    hi = np.maximum(s_lo, s_hi)
+    wide = (x.hi - x.lo) >= _TWO_PI
+    has_max = wide | _contains_point(x, 0.5 * np.pi)
+    has_min = wide | _contains_point(x, -0.5 * np.pi)
+    lo = np.where(has_min, -1.0, _down(lo, _LIB_ULPS))
+    hi = np.where(has_max, 1.0, _up(hi, _LIB_ULPS))
+    return Interval(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
+
+
+def arccos(x: IntervalLike) -> Interval:
+    """Arc cosine of the part of each interval inside ``[-1, 1]`` (decreasing)."""
+    x = as_interval(x)
+    lo_arg = np.clip(x.hi, -1.0, 1.0)
+    hi_arg = np.clip(x.lo, -1.0, 1.0)
+    lo = np.maximum(_down(np.arccos(lo_arg), _LIB_ULPS), 0.0)
+    hi = np.minimum(_up(np.arccos(hi_arg), _LIB_ULPS), _PI_UP)
+    return Interval(lo, hi)
+
+
+def arctan2(y: IntervalLike, x: IntervalLike) -> Interval:
+    """Angle of the points of the box ``y x x``, as an interval within ``[-pi, pi]``.
+
+    Where the box contains the origin or crosses the negative x axis (the
+    cut of ``atan2``), the result is the whole ``[-pi, pi]``.
+    """
+    y, x = as_interval(y), as_interval(x)
+    corners = np.stack(
+        [
+            np.arctan2(y.lo, x.lo),
+            np.arctan2(y.lo, x.hi),
+            np.arctan2(y.hi, x.lo),
+            np.arctan2(y.hi, x.hi),
+        ]
+    )
+    lo = _down(corners.min(axis=0), _LIB_ULPS)
+    hi = _up(corners.max(axis=0), _LIB_ULPS)
+    # the angle is monotone in each coordinate on boxes that avoid the cut
+    # and the origin, so the corners give its range there
+    cut = (x.lo <= 0) & (y.lo <= 0) & (y.hi >= 0)
+    lo = np.where(cut, -_PI_UP, lo)
+    hi = np.where(cut, _PI_UP, hi)
+    return Interval(lo, hi)
