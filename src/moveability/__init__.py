@@ -7,6 +7,7 @@ octree whose leaves are IN, OUT or BOUNDARY.
 
 from importlib.metadata import PackageNotFoundError, version
 
+from .analysis import Analysis, Region, analyze, load_analysis
 from .errors import (
     IncompatibleTreesError,
     InvalidParameterError,
@@ -16,6 +17,7 @@ from .errors import (
 from .measurement import leaf_volumes, locate, measure
 from .projection import project
 from .setops import complement, difference, equals, intersection, union
+from .spec import load_spec
 from .status import BOUNDARY, IN, OUT, Status
 from .topology import adjacency, components
 from .tree import HyperTree, Leaves, load
@@ -29,15 +31,18 @@ __all__ = [
     "BOUNDARY",
     "IN",
     "OUT",
+    "Analysis",
     "HyperTree",
     "IncompatibleTreesError",
     "InvalidParameterError",
     "Leaves",
     "MoveabilityError",
+    "Region",
     "ResolutionError",
     "Status",
     "__version__",
     "adjacency",
+    "analyze",
     "complement",
     "components",
     "difference",
@@ -45,6 +50,8 @@ __all__ = [
     "intersection",
     "leaf_volumes",
     "load",
+    "load_analysis",
+    "load_spec",
     "locate",
     "measure",
     "project",

@@ -1,0 +1,44 @@
+"""Command-line interface: ``moveability``.
+
+One module per command (:mod:`.regions`, :mod:`.locate`, :mod:`.feasible`),
+shared options in :mod:`.options`. Results go to stdout (a summary, or JSON
+with ``--json -``), logs to stderr. Bad input exits with status 2 and the one
+line ``Error: <message>`` on stderr.
+
+Examples
+--------
+>>> from click.testing import CliRunner
+>>> result = CliRunner().invoke(main, ["regions", "missing.toml"])
+>>> result.exit_code
+2
+>>> print(result.output)  # doctest: +ELLIPSIS
+Error: invalid spec: expected an existing TOML file, got 'missing.toml'
+"""
+
+from __future__ import annotations
+
+import click
+
+from .. import __version__
+from . import options
+from .feasible import feasible_command
+from .locate import locate_command
+from .regions import regions_command
+
+__all__ = ["main"]
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="moveability")
+@click.option("-v", "--verbose", count=True, help="More messages on stderr (repeat for more).")
+@click.option("-q", "--quiet", count=True, help="Fewer messages on stderr.")
+@click.pass_context
+def main(ctx: click.Context, verbose: int, quiet: int) -> None:
+    """Regions of feasible point-to-point motions of fully-parallel manipulators."""
+    ctx.obj = {"verbosity": verbose - quiet}
+    options.configure_logging(verbose - quiet)
+
+
+main.add_command(regions_command)
+main.add_command(locate_command)
+main.add_command(feasible_command)

@@ -1,0 +1,65 @@
+"""``moveability locate``: the regions that hold each pose of a list."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import click
+
+from . import options
+
+__all__ = ["format_locate", "locate_command"]
+
+
+def format_locate(data: Mapping[str, Any]) -> str:
+    """A summary for people of the JSON of ``moveability locate``.
+
+    Examples
+    --------
+    >>> print(format_locate({
+    ...     "regions": [0, 1],
+    ...     "points": [
+    ...         {"pose": [1.0, 2.5], "workspace": "in", "regions": {"0": "in", "1": "out"}},
+    ...         {"pose": [9.0, 0.0], "workspace": "unknown",
+    ...          "regions": {"0": "out", "1": "unknown"}},
+    ...     ],
+    ... }))
+    pose     workspace region 0 region 1
+    1, 2.5          in       in      out
+    9, 0       unknown      out  unknown
+    """
+    ids = [str(region) for region in data["regions"]]
+    header = ["pose", "workspace", *(f"region {region}" for region in ids)]
+    rows = [
+        [
+            ", ".join(f"{coordinate:g}" for coordinate in point["pose"]),
+            point["workspace"],
+            *(point["regions"].get(region, "?") for region in ids),
+        ]
+        for point in data["points"]
+    ]
+    return options.format_table(header, rows)
+
+
+@click.command("locate")
+@options.spec_argument
+@options.points_argument
+@options.precision_option
+@options.json_options
+def locate_command(
+    spec: str, points: str, precision: float, json_out: str | None, overwrite: bool
+) -> None:
+    """Whether each pose of POINTS is in the workspace and in each N-connected region.
+
+    SPEC is a TOML file describing the manipulator. POINTS is a CSV file ('-'
+    for stdin) whose header names the pose coordinates (x,y for a five-bar),
+    one pose per row. Each answer is in, out or unknown (at this precision).
+    """
+    options.check_output(json_out, overwrite)
+    with options.reporting_errors():
+        mechanism = options.load_mechanism(spec)
+        poses = options.read_points(points, mechanism.pose_names)
+        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        data = result.locate(poses)
+    options.write_output(data, json_out, overwrite, format_locate)

@@ -1,0 +1,75 @@
+"""``moveability regions``: the N-connected regions of the workspace."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import click
+
+from . import options
+
+__all__ = ["format_regions", "regions_command"]
+
+
+def _area(value: Any) -> str:
+    inner, outer = value
+    return f"[{inner:.6g}, {outer:.6g}]"
+
+
+def format_regions(data: Mapping[str, Any]) -> str:
+    """A summary for people of the JSON of ``moveability regions``.
+
+    Examples
+    --------
+    >>> print(format_regions({
+    ...     "precision": 0.1,
+    ...     "workspace": {"area": [10.0, 12.5]},
+    ...     "regions": [{"id": 0, "area": [4.0, 5.0], "equals_workspace": False},
+    ...                 {"id": 1, "area": [5.5, 7.0], "equals_workspace": None}],
+    ...     "n_connected": None,
+    ... }))
+    precision: 0.1
+    workspace area: [10, 12.5]
+    N-connected regions: 2
+    region      area equals workspace
+    0       [4, 5]                 no
+    1     [5.5, 7]            unknown
+    workspace N-connected: unknown
+    """
+    lines = [
+        f"precision: {data['precision']:g}",
+        f"workspace area: {_area(data['workspace']['area'])}",
+        f"N-connected regions: {len(data['regions'])}",
+    ]
+    if data["regions"]:
+        rows = [
+            [
+                str(region["id"]),
+                _area(region["area"]),
+                options.three_valued(region["equals_workspace"]),
+            ]
+            for region in data["regions"]
+        ]
+        lines.append(options.format_table(["region", "area", "equals workspace"], rows))
+    lines.append(f"workspace N-connected: {options.three_valued(data['n_connected'])}")
+    return "\n".join(lines)
+
+
+@click.command("regions")
+@options.spec_argument
+@options.precision_option
+@options.json_options
+def regions_command(spec: str, precision: float, json_out: str | None, overwrite: bool) -> None:
+    """The N-connected regions of the workspace of the manipulator of SPEC.
+
+    SPEC is a TOML file naming the mechanism, its parameters and joint limits.
+    Areas are given as [inner, outer] bounds; three-valued answers are
+    true, false or null (unknown at this precision).
+    """
+    options.check_output(json_out, overwrite)
+    with options.reporting_errors():
+        mechanism = options.load_mechanism(spec)
+        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        data = result.to_dict()
+    options.write_output(data, json_out, overwrite, format_regions)

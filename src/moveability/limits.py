@@ -1,0 +1,108 @@
+"""Joint limits and the three-valued test of an angle enclosure against them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import InvalidParameterError
+from .intervals import Interval
+
+__all__ = ["INSIDE", "OUTSIDE", "STRADDLES", "JointLimit"]
+
+#: codes returned by :meth:`JointLimit.classify`
+INSIDE, OUTSIDE, STRADDLES = 1, 2, 4
+
+_TWO_PI = 2.0 * np.pi
+# 2 pi is not a float: the shift by k turns is enclosed in [k * lo, k * hi]
+_TWO_PI_LO = float(np.nextafter(_TWO_PI, 0.0))
+_TWO_PI_HI = float(np.nextafter(_TWO_PI, np.inf))
+
+
+@dataclass(frozen=True)
+class JointLimit:
+    """Range ``[lo, hi]`` of a revolute joint angle (radians), or unlimited.
+
+    A limited joint cannot wrap around: with ``[-pi, pi]`` the angle ``pi`` is a
+    stop, not the same position as ``-pi`` reached from the other side.
+    Ranges wider than one turn are refused.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability.intervals import Interval
+    >>> limit = JointLimit(0.0, np.pi)
+    >>> limit.classify(Interval([0.1, 3.0, -3.0], [0.2, 3.3, -2.0])).tolist()
+    [1, 4, 2]
+    >>> JointLimit.unlimited().classify(Interval([5.0], [9.0])).tolist()
+    [1]
+    """
+
+    lo: float
+    hi: float
+    periodic: bool = False
+
+    def __post_init__(self) -> None:
+        if self.periodic:
+            return
+        if not (np.isfinite(self.lo) and np.isfinite(self.hi)):
+            raise InvalidParameterError("limits", "finite bounds", (self.lo, self.hi))
+        if not self.lo < self.hi:
+            raise InvalidParameterError("limits", "lo < hi", (self.lo, self.hi))
+        if self.hi - self.lo > _TWO_PI_HI:
+            raise InvalidParameterError(
+                "limits", "a range of at most 2 pi (use 'unlimited')", (self.lo, self.hi)
+            )
+
+    @classmethod
+    def unlimited(cls) -> JointLimit:
+        """A joint that turns freely (a periodic axis)."""
+        return cls(-np.pi, np.pi, periodic=True)
+
+    def classify(self, angles: Interval) -> NDArray[np.uint8]:
+        """Whether every angle of each interval is inside the range (``INSIDE``),
+        none is (``OUTSIDE``), or it cannot tell (``STRADDLES``).
+
+        Angles are unwrapped: an interval stands for its values modulo 2 pi.
+        """
+        n = angles.lo.shape
+        if self.periodic:
+            return np.full(n, INSIDE, dtype=np.uint8)
+        width = angles.hi - angles.lo
+        # k turns bring lo near [self.lo, self.lo + 2 pi); the tests below are
+        # sound for any k, the choice only makes them sharp
+        k = np.floor((angles.lo - self.lo) / _TWO_PI)
+        k = np.where(np.isfinite(k), -k, 0.0)
+
+        def shifted(turns: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+            # the shift by `turns` turns is enclosed in [turns * 2pi_lo, turns * 2pi_hi]
+            s_lo = np.where(turns >= 0, turns * _TWO_PI_LO, turns * _TWO_PI_HI)
+            s_hi = np.where(turns >= 0, turns * _TWO_PI_HI, turns * _TWO_PI_LO)
+            return (
+                np.nextafter(angles.lo + s_lo, -np.inf),
+                np.nextafter(angles.hi + s_hi, np.inf),
+            )
+
+        lo, hi = shifted(k)
+        inside = (lo >= self.lo) & (hi <= self.hi) & (width < _TWO_PI_LO)
+        outside = width < _TWO_PI_LO
+        for j in (-2.0, -1.0, 0.0, 1.0, 2.0):
+            t_lo, t_hi = shifted(k + j)
+            outside &= (t_lo > self.hi) | (t_hi < self.lo)
+        out = np.full(n, STRADDLES, dtype=np.uint8)
+        out[inside] = INSIDE
+        out[outside & ~inside] = OUTSIDE
+        return out
+
+    def wrap(self, angles: ArrayLike) -> NDArray[np.float64]:
+        """Representatives of angles in ``[lo, lo + 2 pi)`` (in ``[-pi, pi)`` if unlimited)."""
+        a = np.asarray(angles, dtype=np.float64)
+        return self.lo + np.mod(a - self.lo, _TWO_PI)
+
+    def contains(self, angles: ArrayLike) -> NDArray[np.bool_]:
+        """Whether point angles (any turn) fall in the range."""
+        if self.periodic:
+            return np.isfinite(np.asarray(angles, dtype=np.float64))
+        return self.wrap(angles) <= self.hi

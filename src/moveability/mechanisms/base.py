@@ -1,0 +1,157 @@
+"""What the analysis needs of a fully-parallel manipulator with independent legs.
+
+Each leg has one actuated joint and a few closed-form inverse-kinematic
+branches. Over a box of poses a leg is:
+
+``REACH_OUT``
+    unreachable from every pose of the box;
+``REGULAR``
+    reachable from every pose, its branches distinct (no serial singularity),
+    each branch's joint angle enclosed in an interval;
+``FOLD_OUTER`` / ``FOLD_INNER``
+    the box certainly holds poses on both sides of the leg's serial-singular
+    locus (the stretched, or folded, leg); the hull of its branches is enclosed;
+``REACH_UNKNOWN``
+    anything else.
+
+A *posture* picks one branch per leg; over a box where every leg is REGULAR the
+configurations of one posture form a sheet, the graph of a continuous function
+of the pose.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..intervals import Interval
+from ..limits import JointLimit
+
+__all__ = [
+    "FOLD_INNER",
+    "FOLD_OUTER",
+    "REACH_OUT",
+    "REACH_UNKNOWN",
+    "REGULAR",
+    "Leg",
+    "LegReach",
+    "Mechanism",
+]
+
+REACH_OUT, REGULAR, FOLD_OUTER, FOLD_INNER, REACH_UNKNOWN = 0, 1, 2, 3, 4
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class LegReach:
+    """A leg over n boxes of poses.
+
+    Attributes
+    ----------
+    status : ndarray of uint8, shape (n,)
+        One of the reach codes above.
+    branches : list of Interval
+        Joint-angle enclosure of each branch (meaningful where REGULAR).
+    hull : Interval
+        Enclosure of all branches together (where folding; infinite where unknown).
+    fold_connected : ndarray of bool
+        Where folding: the reachable poses of the box form a path-connected set
+        that meets the serial-singular locus, so every configuration of the leg
+        over the box joins every other through the fold.
+    """
+
+    status: NDArray[np.uint8]
+    branches: list[Interval]
+    hull: Interval
+    fold_connected: NDArray[np.bool_]
+
+
+class Leg(Protocol):
+    """A leg: one actuated joint, closed-form branches, point and box evaluation."""
+
+    @property
+    def joint(self) -> str: ...
+
+    @property
+    def n_branches(self) -> int: ...
+
+    def angles(self, points: Array) -> Array: ...
+
+    def constraint(self, points: Array, angles: Array) -> Array: ...
+
+    def serial_term(self, points: Array, angles: Array) -> Array: ...
+
+    def reach(self, lo: Array, hi: Array) -> LegReach: ...
+
+
+class Mechanism:
+    """Base class of fully-parallel manipulators with independent legs.
+
+    Subclasses set ``name``, ``pose_names``, ``legs``, ``limits`` and
+    ``bounds`` and implement :meth:`det_a` (points) and :meth:`det_a_boxes`.
+    """
+
+    name: str
+    pose_names: tuple[str, ...]
+    legs: tuple[Leg, ...]
+    limits: tuple[JointLimit, ...]
+    #: box of poses holding the workspace: (lo, hi)
+    bounds: tuple[Array, Array]
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(leg.joint for leg in self.legs)
+
+    @property
+    def postures(self) -> NDArray[np.int64]:
+        """Branch of each leg in each posture, shape (n_postures, n_legs)."""
+        return np.array(
+            list(itertools.product(*[range(leg.n_branches) for leg in self.legs])),
+            dtype=np.int64,
+        ).reshape(-1, len(self.legs))
+
+    def posture_name(self, index: int) -> str:
+        """A short label of a posture: one sign per leg (``+`` for branch 0)."""
+        return "".join("+-"[b] if b < 2 else str(b) for b in self.postures[index])
+
+    # ---------------------------------------------------------------- points
+    def joint_angles(self, points: Array) -> Array:
+        """Joint angles of every posture at each point, shape (m, n_postures, n_legs)."""
+        per_leg = [leg.angles(points) for leg in self.legs]
+        post = self.postures
+        return np.stack([per_leg[i][:, post[:, i]] for i in range(len(self.legs))], axis=-1)
+
+    def constraints(self, points: Array, joints: Array) -> Array:
+        """``F(X, q)``, one value per leg, shape (m, n_legs)."""
+        return np.stack(
+            [leg.constraint(points, joints[:, i]) for i, leg in enumerate(self.legs)], axis=-1
+        )
+
+    def det_b(self, points: Array, joints: Array) -> Array:
+        """det B, the product of the legs' serial terms."""
+        terms = [leg.serial_term(points, joints[:, i]) for i, leg in enumerate(self.legs)]
+        return np.prod(np.stack(terms, axis=-1), axis=-1)
+
+    def det_a(self, points: Array, joints: Array) -> Array:
+        raise NotImplementedError
+
+    def to_spec(self) -> dict[str, object]:
+        """The spec mapping that rebuilds this mechanism."""
+        raise NotImplementedError
+
+    # ----------------------------------------------------------------- boxes
+    def det_a_boxes(self, lo: Array, hi: Array, angles: list[Interval]) -> Interval:
+        """Enclosure of det A over boxes of poses with joint-angle enclosures per leg."""
+        raise NotImplementedError
+
+    def folds_connected(self, legs: tuple[int, ...], lo: Array, hi: Array) -> NDArray[np.bool_]:
+        """Where several legs fold in one box: whether their configurations all join.
+
+        The default certifies nothing; mechanisms may know better.
+        """
+        return np.zeros(lo.shape[0], dtype=bool)

@@ -1,0 +1,195 @@
+"""A planar leg of two links: an actuated revolute joint at a fixed base, a
+passive revolute joint at the elbow, and the platform point at the tip.
+
+The leg's constraint is ``F(P, t) = |P - C(t)|^2 - b^2`` with
+``C(t) = base + a (cos t, sin t)``. For a pose ``P`` at distance ``rho`` from
+the base, ``t = theta +- alpha`` where ``theta`` is the direction of
+``P - base`` and ``alpha = arccos((rho^2 + a^2 - b^2) / (2 a rho))``. The two
+branches meet (a serial singularity) on the circles ``rho = a + b`` (the leg
+stretched) and ``rho = |a - b|`` (the leg folded).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .. import intervals as iv
+from ..errors import InvalidParameterError
+from ..intervals import Interval
+from .base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, LegReach
+
+__all__ = ["RRLeg"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class RRLeg:
+    """A revolute-revolute leg.
+
+    Parameters
+    ----------
+    base : tuple of float
+        The actuated joint's centre.
+    proximal, distal : float
+        Lengths ``a`` (base to elbow) and ``b`` (elbow to platform point).
+    joint : str
+        Name of the actuated joint.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> leg = RRLeg((0.0, 0.0), 8.0, 5.0, "theta1")
+    >>> angles = leg.angles(np.array([[10.0, 3.0]]))
+    >>> np.allclose(leg.constraint(np.array([[10.0, 3.0]] * 2), angles[0]), 0.0)
+    True
+    """
+
+    base: tuple[float, float]
+    proximal: float
+    distal: float
+    joint: str
+
+    n_branches = 2
+
+    def __post_init__(self) -> None:
+        for name, value in (("proximal", self.proximal), ("distal", self.distal)):
+            if not (np.isfinite(value) and value > 0):
+                raise InvalidParameterError(
+                    f"{self.joint} {name} length", "a positive length", value
+                )
+
+    # ------------------------------------------------------------- points
+    def elbow(self, angles: Array) -> Array:
+        """Elbow positions ``C(t)`` for joint angles, shape (..., 2)."""
+        t = np.asarray(angles, dtype=np.float64)
+        return np.stack(
+            [self.base[0] + self.proximal * np.cos(t), self.base[1] + self.proximal * np.sin(t)],
+            axis=-1,
+        )
+
+    def constraint(self, points: Array, angles: Array) -> Array:
+        """``F(P, t) = |P - C(t)|^2 - b^2``."""
+        d = np.asarray(points, dtype=np.float64) - self.elbow(angles)
+        return (d**2).sum(axis=-1) - self.distal**2
+
+    def angles(self, points: Array) -> Array:
+        """Joint angle of each branch at each point, shape (m, 2); NaN where unreachable.
+
+        Branch 0 is ``theta + alpha``, branch 1 ``theta - alpha``.
+        """
+        p = np.asarray(points, dtype=np.float64)
+        d = p - np.asarray(self.base)
+        rho = np.hypot(d[:, 0], d[:, 1])
+        a, b = self.proximal, self.distal
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = (rho**2 + a * a - b * b) / (2 * a * rho)
+        ok = np.abs(g) <= 1.0
+        alpha = np.where(ok, np.arccos(np.clip(g, -1.0, 1.0)), np.nan)
+        theta = np.arctan2(d[:, 1], d[:, 0])
+        return np.stack([theta + alpha, theta - alpha], axis=1)
+
+    def serial_term(self, points: Array, angles: Array) -> Array:
+        """The leg's term of B, ``-(P - C) x (C - base)``: zero at a serial singularity."""
+        c = self.elbow(angles)
+        pc = np.asarray(points, dtype=np.float64) - c
+        ca = c - np.asarray(self.base)
+        return -(pc[..., 0] * ca[..., 1] - pc[..., 1] * ca[..., 0])
+
+    # ------------------------------------------------------------- boxes
+    def reach(self, lo: Array, hi: Array) -> LegReach:
+        """Reachability and angle enclosures of the leg over boxes ``[lo, hi]`` (n, 2)."""
+        cx, cy = self.base
+        a, b = self.proximal, self.distal
+        n = lo.shape[0]
+        # exact nearest point and farthest corner, then their squared distances
+        near = np.clip(np.asarray(self.base)[None, :], lo, hi)
+        far = np.where(np.abs(lo - self.base) > np.abs(hi - self.base), lo, hi)
+        d_near = Interval(near) - np.asarray(self.base)[None, :]
+        d_far = Interval(far) - np.asarray(self.base)[None, :]
+        near2 = iv.square(d_near[:, 0]) + iv.square(d_near[:, 1])
+        far2 = iv.square(d_far[:, 0]) + iv.square(d_far[:, 1])
+        r_out2 = iv.square(iv.as_interval(a) + b)
+        r_in2 = iv.square(iv.as_interval(a) - b)
+
+        out = (near2.lo > r_out2.hi) | (far2.hi < r_in2.lo)
+        regular = (near2.lo > r_in2.hi) & (far2.hi < r_out2.lo) & (near2.lo > 0)
+        # a fold is certified where the box holds points on both sides of the circle
+        straddle_out = (near2.hi < r_out2.lo) & (far2.lo > r_out2.hi)
+        straddle_in = (near2.hi < r_in2.lo) & (far2.lo > r_in2.hi)
+        fold_outer = straddle_out & (near2.lo > r_in2.hi) & ~out
+        fold_inner = straddle_in & (far2.hi < r_out2.lo) & ~out & (r_in2.lo > 0)
+        status = np.full(n, REACH_UNKNOWN, dtype=np.uint8)
+        status[fold_inner] = FOLD_INNER
+        status[fold_outer] = FOLD_OUTER
+        status[regular] = REGULAR
+        status[out] = REACH_OUT
+
+        theta = self._direction(lo, hi)
+        alpha = self._alpha(near2, far2)
+        branches = [theta + alpha, theta - alpha]
+        # both branches together, as one unwrapped interval: theta + [-alpha, alpha] and
+        # theta + [alpha, 2 pi - alpha] both hold them; the narrower is kept (the first
+        # where the branches meet at alpha = 0, the second where they meet at pi)
+        two_pi = Interval(np.nextafter(2 * np.pi, 0.0), np.nextafter(2 * np.pi, np.inf))
+        about_zero = theta + Interval(-alpha.hi, alpha.hi)
+        about_pi = theta + iv.hull(Interval(alpha.lo), two_pi - Interval(alpha.lo))
+        use_zero = about_zero.width <= about_pi.width
+        hull = Interval(
+            np.where(use_zero, about_zero.lo, about_pi.lo),
+            np.where(use_zero, about_zero.hi, about_pi.hi),
+        )
+        unknown = status == REACH_UNKNOWN
+        hull = Interval(np.where(unknown, -np.inf, hull.lo), np.where(unknown, np.inf, hull.hi))
+        # the set of reachable points of the box is path-connected and meets the fold:
+        # box and disk are convex (outer fold); box minus disk is star-shaped about the
+        # corner farthest from the base when the base is beyond both ranges (inner fold)
+        beyond = ((cx < lo[:, 0]) | (cx > hi[:, 0])) & ((cy < lo[:, 1]) | (cy > hi[:, 1]))
+        fold_connected = (status == FOLD_OUTER) | ((status == FOLD_INNER) & beyond)
+        return LegReach(
+            status=status,
+            branches=branches,
+            hull=hull,
+            fold_connected=fold_connected,
+        )
+
+    def _direction(self, lo: Array, hi: Array) -> Interval:
+        """Enclosure of the direction of ``P - base`` over each box, unwrapped near its centre."""
+        base = np.asarray(self.base)
+        mid = 0.5 * (lo + hi) - base
+        theta_m = np.arctan2(mid[:, 1], mid[:, 0])
+        cs, sn = np.cos(theta_m), np.sin(theta_m)
+        # (cs, sn) is a vector of direction atan2(sn, cs): rotating by it is exact up to a
+        # scale, which leaves angles unchanged
+        ref = iv.arctan2(Interval(sn), Interval(cs))
+        dx = Interval(lo[:, 0], hi[:, 0]) - base[0]
+        dy = Interval(lo[:, 1], hi[:, 1]) - base[1]
+        ux = dx * cs + dy * sn
+        uy = dy * cs - dx * sn
+        return ref + iv.arctan2(uy, ux)
+
+    def _alpha(self, near2: Interval, far2: Interval) -> Interval:
+        """Enclosure of ``alpha`` for distances between the nearest and farthest points."""
+        a, b = self.proximal, self.distal
+        k = (iv.as_interval(a) * a - iv.as_interval(b) * b) / (2.0 * a)
+
+        def g(rho2: Interval) -> Interval:
+            rho = iv.sqrt(rho2)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return rho / (2.0 * a) + k / rho
+
+        g_near, g_far = g(near2), g(far2)
+        g_lo = np.minimum(g_near.lo, g_far.lo)
+        g_hi = np.maximum(g_near.hi, g_far.hi)
+        # g(rho) = rho / 2a + k / rho has its minimum sqrt(2k / a) at rho = sqrt(2 a k)
+        if k.lo > 0:
+            rho_star2 = iv.as_interval(2.0 * a) * k
+            inside = (near2.lo <= rho_star2.hi) & (far2.hi >= rho_star2.lo)
+            g_min = iv.sqrt(k * 2.0 / a).lo
+            g_lo = np.where(inside, np.minimum(g_lo, g_min), g_lo)
+        g_lo = np.where(np.isnan(g_lo), -np.inf, g_lo)
+        g_hi = np.where(np.isnan(g_hi), np.inf, g_hi)
+        return iv.arccos(Interval(g_lo, g_hi))

@@ -1,0 +1,150 @@
+"""Posture sheets over boxes of poses: the certified evidence of the analysis.
+
+Over a box of poses where every leg is REGULAR, the configurations of one
+posture form a *sheet*, the graph of a continuous function of the pose. The
+sheet's status for the analysis is
+
+``IN``
+    every configuration is valid: within the joint limits, det A of one sign
+    (recorded in ``sign``), so the whole sheet lies in one region;
+``OUT``
+    no valid configuration (a leg cannot reach, or a joint is beyond its limits);
+``BOUNDARY``
+    undecided.
+
+Where some legs fold (their branches meet inside the box), the postures that
+differ only on those legs form a *fold group*; it is certified when the
+configurations over the box all join through the fold (a geometric fact the
+mechanism certifies) and are all valid with one sign of det A. A certified
+group is where a region changes posture.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .intervals import Interval
+from .limits import INSIDE, OUTSIDE
+from .mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
+from .status import BOUNDARY, IN, OUT
+
+__all__ = ["SheetTable", "classify_sheets"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class SheetTable:
+    """Evidence for n boxes and P postures.
+
+    Attributes
+    ----------
+    leg_status : (n, n_legs) uint8
+        Reach code of each leg.
+    status : (n, P) uint8
+        IN / OUT / BOUNDARY of each posture sheet.
+    sign : (n, P) int8
+        Sign of det A over the sheet: +1, -1, or 0 when it may vanish.
+    exists : (n, P) bool
+        Every pose of the box has a configuration of this posture (all legs REGULAR).
+    within : (n, P) bool
+        Those configurations are within the joint limits.
+    group : (n, P) bool
+        The posture belongs to a certified fold group of its box.
+    """
+
+    leg_status: NDArray[np.uint8]
+    status: NDArray[np.uint8]
+    sign: NDArray[np.int8]
+    exists: NDArray[np.bool_]
+    within: NDArray[np.bool_]
+    group: NDArray[np.bool_]
+
+    @property
+    def folding(self) -> NDArray[np.bool_]:
+        """(n, n_legs): legs whose branches may meet in the box."""
+        return (self.leg_status != REGULAR) & (self.leg_status != REACH_OUT)
+
+    def decided(self) -> NDArray[np.bool_]:
+        """Boxes where no leg folds and every sheet is IN or OUT."""
+        return ~self.folding.any(axis=1) & (self.status != BOUNDARY).all(axis=1)
+
+
+def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
+    """Certify the posture sheets of ``mechanism`` over boxes ``[lo, hi]`` (n, k)."""
+    legs = mechanism.legs
+    n = lo.shape[0]
+    reaches = [leg.reach(lo, hi) for leg in legs]
+    leg_status = np.stack([r.status for r in reaches], axis=1).astype(np.uint8)
+    postures = mechanism.postures
+    n_post = postures.shape[0]
+    status = np.full((n, n_post), BOUNDARY, dtype=np.uint8)
+    sign = np.zeros((n, n_post), dtype=np.int8)
+    exists = np.zeros((n, n_post), dtype=bool)
+    within = np.zeros((n, n_post), dtype=bool)
+    group = np.zeros((n, n_post), dtype=bool)
+
+    # limits of each leg branch, and of each leg's hull where it folds
+    branch_limits = [
+        [mechanism.limits[i].classify(b) for b in reaches[i].branches] for i in range(len(legs))
+    ]
+    hull_limits = [mechanism.limits[i].classify(reaches[i].hull) for i in range(len(legs))]
+    folding = (leg_status != REGULAR) & (leg_status != REACH_OUT)
+    any_out = (leg_status == REACH_OUT).any(axis=1)
+    any_unknown = (leg_status == REACH_UNKNOWN).any(axis=1)
+    fold_count = folding.sum(axis=1)
+
+    # geometry: the configurations of the folding legs over the box all join
+    fold_ok = np.zeros(n, dtype=bool)
+    single = fold_count == 1
+    for i in range(len(legs)):
+        fold_ok |= single & folding[:, i] & reaches[i].fold_connected
+    if len(legs) >= 2:
+        for i in range(len(legs)):
+            for j in range(i + 1, len(legs)):
+                pair = (fold_count == 2) & folding[:, i] & folding[:, j]
+                pair &= (leg_status[:, i] == FOLD_OUTER) | (leg_status[:, i] == FOLD_INNER)
+                pair &= (leg_status[:, j] == FOLD_OUTER) | (leg_status[:, j] == FOLD_INNER)
+                if pair.any():
+                    fold_ok |= pair & mechanism.folds_connected((i, j), lo, hi)
+    fold_ok &= ~any_out & ~any_unknown
+
+    for p in range(n_post):
+        angles: list[Interval] = []
+        lim_in = np.ones(n, dtype=bool)
+        lim_out = np.zeros(n, dtype=bool)
+        for i, b in enumerate(postures[p]):
+            r = reaches[i]
+            regular = leg_status[:, i] == REGULAR
+            a = Interval(
+                np.where(regular, r.branches[b].lo, r.hull.lo),
+                np.where(regular, r.branches[b].hi, r.hull.hi),
+            )
+            angles.append(a)
+            code = np.where(regular, branch_limits[i][b], hull_limits[i])
+            lim_in &= code == INSIDE
+            lim_out |= code == OUTSIDE
+        with np.errstate(invalid="ignore"):
+            det = mechanism.det_a_boxes(lo, hi, angles)
+        positive = det.lo > 0
+        negative = det.hi < 0
+        sign[:, p] = np.where(positive, 1, np.where(negative, -1, 0))
+        all_regular = ~folding.any(axis=1) & ~any_out
+        exists[:, p] = all_regular
+        within[:, p] = lim_in
+        dead = any_out | lim_out
+        status[:, p] = np.where(
+            dead, OUT, np.where(all_regular & lim_in & (sign[:, p] != 0), IN, BOUNDARY)
+        )
+        group[:, p] = fold_ok & lim_in & (sign[:, p] != 0)
+    return SheetTable(
+        leg_status=leg_status,
+        status=status,
+        sign=sign,
+        exists=exists,
+        within=within,
+        group=group,
+    )

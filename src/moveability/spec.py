@@ -1,0 +1,368 @@
+"""Manipulator specifications: read a TOML file (or a parsed mapping), validate, normalise.
+
+A specification names a mechanism, gives its parameters (lengths) and the limits
+of its actuated joints, in radians::
+
+    mechanism = "five-bar"
+    [parameters]
+    L0 = 7.0
+    L1 = 8.0
+    L2 = 5.0
+    L3 = 8.0
+    L4 = 5.0
+    [limits]          # [lo, hi] in radians, or "unlimited"
+    theta1 = [0.0, "pi"]
+    theta2 = [0.0, "pi"]
+
+Bounds are numbers or small expressions of ``pi`` (``"pi/2"``, ``"-3*pi/4"``),
+read by :func:`parse_angle` without ``eval``. Every joint of the mechanism needs
+a limit: a joint that turns freely says so with ``"unlimited"``.
+
+:func:`load_spec` returns a plain dict::
+
+    {"mechanism": "five-bar",
+     "parameters": {"L0": 7.0, ...},
+     "limits": {"theta1": (0.0, 3.14159...), "theta2": "unlimited"}}
+
+Mechanisms are known through :data:`MECHANISMS`; adding one is adding an entry.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import os
+import re
+import tomllib
+from collections.abc import Mapping, Sequence
+from typing import Any, NamedTuple
+
+from .errors import InvalidParameterError
+
+__all__ = [
+    "MECHANISMS",
+    "UNLIMITED",
+    "MechanismSchema",
+    "SpecError",
+    "load_spec",
+    "parse_angle",
+]
+
+#: the limit of a joint that turns freely
+UNLIMITED = "unlimited"
+
+# a range of exactly one turn ([-pi, pi]) is allowed; the slack of one ulp lets
+# "-pi" .. "pi" and "0" .. "2*pi" through whatever the rounding
+_TWO_PI_MAX = math.nextafter(2.0 * math.pi, math.inf)
+
+_TOP_KEYS = ("mechanism", "parameters", "limits")
+
+
+class SpecError(InvalidParameterError):
+    """A specification is missing, malformed or has a value that is not allowed.
+
+    ``name`` is the key at fault as written in the file (``"parameters.L2"``,
+    ``"limits.theta1"``, ``"mechanism"``), or the file itself.
+    """
+
+
+class MechanismSchema(NamedTuple):
+    """What a specification of one mechanism must give.
+
+    Parameters
+    ----------
+    parameters : tuple of str
+        Names of the parameters, all positive lengths.
+    joints : tuple of str
+        Names of the actuated joints; each needs an entry in ``[limits]``.
+    defaults : mapping of str to float, optional
+        Values of the parameters that may be left out; ``None`` when all are
+        required.
+    """
+
+    parameters: tuple[str, ...]
+    joints: tuple[str, ...]
+    defaults: Mapping[str, float] | None = None
+
+
+#: known mechanisms: name -> schema
+MECHANISMS: dict[str, MechanismSchema] = {
+    "five-bar": MechanismSchema(
+        parameters=("L0", "L1", "L2", "L3", "L4"),
+        joints=("theta1", "theta2"),
+        defaults=None,
+    ),
+}
+
+
+class _Plain(str):
+    """Text shown as is (not quoted) in an error message."""
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return str.__str__(self)
+
+
+_NOTHING = _Plain("nothing")
+
+_NUMBER = r"(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?"
+_PLAIN_RE = re.compile(rf"\s*(?P<sign>[-+]?)\s*(?P<num>{_NUMBER})\s*")
+_PI_RE = re.compile(
+    rf"\s*(?P<sign>[-+]?)\s*(?:(?P<num>{_NUMBER})\s*\*\s*)?pi(?:\s*/\s*(?P<den>{_NUMBER}))?\s*",
+    re.IGNORECASE,
+)
+_ANGLE_ALLOWED = 'a finite angle in radians: a number or "pi", "-pi", "pi/2", "3*pi/4", ...'
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def parse_angle(value: object, name: str = "angle") -> float:
+    """Read an angle in radians from a number or a small expression of ``pi``.
+
+    Parameters
+    ----------
+    value : float or str
+        A real number, or text of one of the forms ``[-]number``, ``[-]pi``,
+        ``[-]pi/number``, ``[-]number*pi``, ``[-]number*pi/number`` (spaces
+        allowed around the operators). Nothing is evaluated.
+    name : str, default "angle"
+        How to name the value in an error message.
+
+    Returns
+    -------
+    float
+        The angle, finite.
+
+    Raises
+    ------
+    SpecError
+        If ``value`` is not a finite number nor one of the forms above
+        (``"2pi"``, ``"pi+1"``, ``"nan"`` and ``"pi/0"`` are refused).
+
+    Examples
+    --------
+    >>> parse_angle("pi/2")
+    1.5707963267948966
+    >>> parse_angle("-3*pi/4")
+    -2.356194490192345
+    >>> parse_angle(" 0.5 "), parse_angle(2)
+    (0.5, 2.0)
+    >>> parse_angle("pi/2 + 1", name="limits.theta1[1]")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+        ...
+    moveability.spec.SpecError: invalid limits.theta1[1]: expected ..., got 'pi/2 + 1'
+    """
+    if _is_number(value):
+        angle = float(value)  # type: ignore[arg-type]
+    elif isinstance(value, str):
+        angle = _parse_angle_text(value, name)
+    else:
+        raise SpecError(name, _ANGLE_ALLOWED, value)
+    if not math.isfinite(angle):
+        raise SpecError(name, _ANGLE_ALLOWED, value)
+    return angle
+
+
+def _parse_angle_text(text: str, name: str) -> float:
+    plain = _PLAIN_RE.fullmatch(text)
+    if plain is not None:
+        magnitude = float(plain["num"])
+        sign = plain["sign"]
+    else:
+        match = _PI_RE.fullmatch(text)
+        if match is None:
+            raise SpecError(name, _ANGLE_ALLOWED, text)
+        coefficient = float(match["num"]) if match["num"] else 1.0
+        denominator = float(match["den"]) if match["den"] else 1.0
+        if denominator == 0.0:
+            raise SpecError(name, _ANGLE_ALLOWED, text)
+        magnitude = coefficient * math.pi / denominator
+        sign = match["sign"]
+    return -magnitude if sign == "-" else magnitude
+
+
+def load_spec(source: str | os.PathLike[str] | Mapping[str, Any]) -> dict[str, Any]:
+    """Read, check and normalise the specification of a manipulator.
+
+    Parameters
+    ----------
+    source : str, os.PathLike or mapping
+        Path to a TOML file, or the mapping such a file parses to (the output of
+        :func:`load_spec` is accepted too).
+
+    Returns
+    -------
+    dict
+        ``{"mechanism": name, "parameters": {name: float}, "limits": {joint:
+        (lo, hi) or "unlimited"}}``: parameters and joints in the order of the
+        mechanism's schema, bounds as floats in radians.
+
+    Raises
+    ------
+    SpecError
+        A subclass of :class:`~moveability.errors.InvalidParameterError` whose
+        message names the key at fault: the file (missing, unreadable, not
+        TOML: tomllib's line and column are quoted), ``mechanism`` (unknown;
+        the known ones are listed), ``parameters.<name>`` (missing, unknown,
+        not a positive finite number), ``limits.<joint>`` (missing, unknown,
+        not a pair ``[lo, hi]`` nor ``"unlimited"``, a bound that is not an
+        angle, ``lo >= hi``, wider than 2 pi), or a top-level key that is
+        not one of ``mechanism``, ``parameters``, ``limits``.
+
+    Examples
+    --------
+    >>> spec = load_spec({
+    ...     "mechanism": "five-bar",
+    ...     "parameters": {"L0": 7, "L1": 8, "L2": 5, "L3": 8, "L4": 5},
+    ...     "limits": {"theta1": [0, "pi"], "theta2": "unlimited"},
+    ... })
+    >>> spec["parameters"]
+    {'L0': 7.0, 'L1': 8.0, 'L2': 5.0, 'L3': 8.0, 'L4': 5.0}
+    >>> spec["limits"]
+    {'theta1': (0.0, 3.141592653589793), 'theta2': 'unlimited'}
+    >>> load_spec(spec) == spec
+    True
+
+    From a file:
+
+    >>> import pathlib, tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     path = pathlib.Path(tmp, "five-bar.toml")
+    ...     _ = path.write_text('''
+    ... mechanism = "five-bar"
+    ... [parameters]
+    ... L0 = 7.0
+    ... L1 = 8.0
+    ... L2 = 5.0
+    ... L3 = 8.0
+    ... L4 = 5.0
+    ... [limits]
+    ... theta1 = ["-pi", "pi"]
+    ... theta2 = [0.0, "pi/2"]
+    ... ''')
+    ...     load_spec(path)["limits"]["theta2"]
+    (0.0, 1.5707963267948966)
+
+    Errors name the key:
+
+    >>> load_spec({"mechanism": "five-bar", "parameters": {"L0": 7, "L1": 8, "L2": -5}})
+    Traceback (most recent call last):
+        ...
+    moveability.spec.SpecError: invalid parameters.L2: expected a positive finite length, got -5
+    """
+    if isinstance(source, Mapping):
+        data: Mapping[str, Any] = source
+    elif isinstance(source, str | os.PathLike):
+        data = _read_toml(source)
+    else:
+        raise SpecError("spec", "a path to a TOML file or a mapping", source)
+
+    for key in data:
+        if key not in _TOP_KEYS:
+            raise SpecError(
+                str(key), "one of the keys " + ", ".join(map(repr, _TOP_KEYS)), _Plain(str(key))
+            )
+
+    name = _mechanism(data.get("mechanism", _NOTHING))
+    schema = MECHANISMS[name]
+    return {
+        "mechanism": name,
+        "parameters": _parameters(data.get("parameters", _NOTHING), name, schema),
+        "limits": _limits(data.get("limits", _NOTHING), name, schema),
+    }
+
+
+def _read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    shown = os.fspath(path)
+    try:
+        with open(path, "rb") as stream:
+            return tomllib.load(stream)
+    except FileNotFoundError:
+        raise SpecError("spec", "an existing TOML file", shown) from None
+    except OSError as error:
+        reason = error.strerror or type(error).__name__
+        raise SpecError("spec", f"a readable TOML file ({reason})", shown) from None
+    except UnicodeDecodeError as error:
+        raise SpecError(f"spec {shown}", "UTF-8 text", _Plain(str(error))) from None
+    except tomllib.TOMLDecodeError as error:
+        # tomllib's message ends with "(at line L, column C)"
+        raise SpecError(f"spec {shown}", "valid TOML", _Plain(str(error))) from None
+
+
+def _mechanism(value: object) -> str:
+    known = ", ".join(map(repr, MECHANISMS))
+    if isinstance(value, str):
+        name = value.strip().lower()
+        if name in MECHANISMS:
+            return name
+    raise SpecError("mechanism", f"one of {known}", value)
+
+
+def _table(value: object, key: str, allowed: str) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise SpecError(key, allowed, value)
+    return value
+
+
+def _parameters(value: object, mechanism: str, schema: MechanismSchema) -> dict[str, float]:
+    names = ", ".join(schema.parameters)
+    table = _table(value, "parameters", f"a table giving {names}")
+    defaults = schema.defaults or {}
+    for key in table:
+        if key not in schema.parameters:
+            raise SpecError(
+                f"parameters.{key}",
+                f"no such parameter ({mechanism} takes {names})",
+                table[key],
+            )
+    out: dict[str, float] = {}
+    for key in schema.parameters:
+        if key in table:
+            length = table[key]
+        elif key in defaults:
+            length = defaults[key]
+        else:
+            raise SpecError(f"parameters.{key}", "a positive finite length", _NOTHING)
+        if not (_is_number(length) and math.isfinite(length) and length > 0):
+            raise SpecError(f"parameters.{key}", "a positive finite length", length)
+        out[key] = float(length)
+    return out
+
+
+def _limits(
+    value: object, mechanism: str, schema: MechanismSchema
+) -> dict[str, tuple[float, float] | str]:
+    joints = ", ".join(schema.joints)
+    allowed = f'[lo, hi] in radians with lo < hi, or "{UNLIMITED}"'
+    table = _table(value, "limits", f"a table giving {joints}, each {allowed}")
+    for key in table:
+        if key not in schema.joints:
+            raise SpecError(
+                f"limits.{key}", f"no such joint ({mechanism} has {joints})", table[key]
+            )
+    out: dict[str, tuple[float, float] | str] = {}
+    for joint in schema.joints:
+        key = f"limits.{joint}"
+        limit = table.get(joint, _NOTHING)
+        if limit is _NOTHING:
+            raise SpecError(key, allowed, _NOTHING)
+        if isinstance(limit, str):
+            if limit.strip().lower() != UNLIMITED:
+                raise SpecError(key, allowed, limit)
+            out[joint] = UNLIMITED
+            continue
+        if not isinstance(limit, Sequence) or len(limit) != 2:
+            raise SpecError(key, allowed, limit)
+        lo = parse_angle(limit[0], f"{key}[0]")
+        hi = parse_angle(limit[1], f"{key}[1]")
+        if not lo < hi:
+            raise SpecError(key, "[lo, hi] with lo < hi (an empty or reversed range)", limit)
+        if hi - lo > _TWO_PI_MAX:
+            raise SpecError(
+                key, f'a range no wider than 2*pi (use "{UNLIMITED}" for a free joint)', limit
+            )
+        out[joint] = (lo, hi)
+    return out
