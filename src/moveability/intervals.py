@@ -69,6 +69,8 @@ class Interval:
 
     lo: Array
     hi: Array
+    #: numpy defers to the reflected operators, so ``array * interval`` is an Interval
+    __array_ufunc__ = None
 
     def __init__(self, lo: ArrayLike, hi: ArrayLike | None = None) -> None:
         lo_a = np.asarray(lo, dtype=np.float64)
@@ -114,20 +116,22 @@ class Interval:
 
     def __add__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
-        return Interval(_down(self.lo + o.lo), _up(self.hi + o.hi))
+        with np.errstate(over="ignore"):
+            return Interval(_down(self.lo + o.lo), _up(self.hi + o.hi))
 
     __radd__ = __add__
 
     def __sub__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
-        return Interval(_down(self.lo - o.hi), _up(self.hi - o.lo))
+        with np.errstate(over="ignore"):
+            return Interval(_down(self.lo - o.hi), _up(self.hi - o.lo))
 
     def __rsub__(self, other: IntervalLike) -> Interval:
         return as_interval(other) - self
 
     def __mul__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
-        with np.errstate(invalid="ignore"):
+        with np.errstate(invalid="ignore", over="ignore"):
             products = np.stack([self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi])
         # 0 * inf is nan: the product of a zero bound is zero
         products = np.where(np.isnan(products), 0.0, products)
@@ -138,7 +142,7 @@ class Interval:
     def __truediv__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
         straddles = (o.lo <= 0) & (o.hi >= 0)
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             inv_lo = np.where(straddles, -_INF, _down(1.0 / o.hi))
             inv_hi = np.where(straddles, _INF, _up(1.0 / o.lo))
         return self * Interval(inv_lo, inv_hi)
@@ -162,7 +166,8 @@ def hull(a: Interval, b: Interval) -> Interval:
 def square(x: IntervalLike) -> Interval:
     """``x ** 2``, tighter than ``x * x`` when ``x`` straddles zero."""
     x = as_interval(x)
-    a, b = x.lo * x.lo, x.hi * x.hi
+    with np.errstate(over="ignore"):
+        a, b = x.lo * x.lo, x.hi * x.hi
     straddles = (x.lo <= 0) & (x.hi >= 0)
     lo = np.where(straddles, 0.0, _down(np.minimum(a, b)))
     return Interval(np.maximum(lo, 0.0), _up(np.maximum(a, b)))
@@ -179,10 +184,12 @@ def sqrt(x: IntervalLike) -> Interval:
 
 def _contains_point(x: Interval, phase: float) -> NDArray[np.bool_]:
     """Whether ``[lo, hi]`` may contain a point ``phase + 2 k pi`` (conservative)."""
-    # the first such point at or above lo (computed with a safety margin)
-    k = np.ceil((x.lo - phase) / _TWO_PI - 1e-12)
-    first = phase + k * _TWO_PI
-    return first <= x.hi + 1e-12 * np.maximum(1.0, np.abs(x.hi))
+    with np.errstate(over="ignore", invalid="ignore"):
+        # the quotient's rounding error grows with |x|: the margin is relative
+        tol = 1e-12 * np.maximum(1.0, np.maximum(np.abs(x.lo), np.abs(x.hi)))
+        k = np.ceil((x.lo - tol - phase) / _TWO_PI)
+        first = phase + k * _TWO_PI
+        return first <= x.hi + tol
 
 
 def cos(x: IntervalLike) -> Interval:
@@ -191,7 +198,8 @@ def cos(x: IntervalLike) -> Interval:
     c_lo, c_hi = np.cos(x.lo), np.cos(x.hi)
     lo = np.minimum(c_lo, c_hi)
     hi = np.maximum(c_lo, c_hi)
-    wide = (x.hi - x.lo) >= _TWO_PI
+    with np.errstate(over="ignore", invalid="ignore"):
+        wide = (x.hi - x.lo) >= _TWO_PI
     has_max = wide | _contains_point(x, 0.0)
     has_min = wide | _contains_point(x, np.pi)
     lo = np.where(has_min, -1.0, _down(lo, _LIB_ULPS))
@@ -205,7 +213,8 @@ def sin(x: IntervalLike) -> Interval:
     s_lo, s_hi = np.sin(x.lo), np.sin(x.hi)
     lo = np.minimum(s_lo, s_hi)
     hi = np.maximum(s_lo, s_hi)
-    wide = (x.hi - x.lo) >= _TWO_PI
+    with np.errstate(over="ignore", invalid="ignore"):
+        wide = (x.hi - x.lo) >= _TWO_PI
     has_max = wide | _contains_point(x, 0.5 * np.pi)
     has_min = wide | _contains_point(x, -0.5 * np.pi)
     lo = np.where(has_min, -1.0, _down(lo, _LIB_ULPS))
@@ -243,6 +252,6 @@ def arctan2(y: IntervalLike, x: IntervalLike) -> Interval:
     # the angle is monotone in each coordinate on boxes that avoid the cut
     # and the origin, so the corners give its range there
     cut = (x.lo <= 0) & (y.lo <= 0) & (y.hi >= 0)
-    lo = np.where(cut, -_PI_UP, lo)
-    hi = np.where(cut, _PI_UP, hi)
+    lo = np.maximum(np.where(cut, -_PI_UP, lo), -_PI_UP)
+    hi = np.minimum(np.where(cut, _PI_UP, hi), _PI_UP)
     return Interval(lo, hi)

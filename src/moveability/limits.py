@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import InvalidParameterError
 from .intervals import Interval
 
-__all__ = ["INSIDE", "OUTSIDE", "STRADDLES", "JointLimit"]
+__all__ = ["INSIDE", "OUTSIDE", "STRADDLES", "JointLimit", "classify_angles"]
 
 #: codes returned by :meth:`JointLimit.classify`
 INSIDE, OUTSIDE, STRADDLES = 1, 2, 4
@@ -67,34 +67,9 @@ class JointLimit:
 
         Angles are unwrapped: an interval stands for its values modulo 2 pi.
         """
-        n = angles.lo.shape
         if self.periodic:
-            return np.full(n, INSIDE, dtype=np.uint8)
-        width = angles.hi - angles.lo
-        # k turns bring lo near [self.lo, self.lo + 2 pi); the tests below are
-        # sound for any k, the choice only makes them sharp
-        k = np.floor((angles.lo - self.lo) / _TWO_PI)
-        k = np.where(np.isfinite(k), -k, 0.0)
-
-        def shifted(turns: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-            # the shift by `turns` turns is enclosed in [turns * 2pi_lo, turns * 2pi_hi]
-            s_lo = np.where(turns >= 0, turns * _TWO_PI_LO, turns * _TWO_PI_HI)
-            s_hi = np.where(turns >= 0, turns * _TWO_PI_HI, turns * _TWO_PI_LO)
-            return (
-                np.nextafter(angles.lo + s_lo, -np.inf),
-                np.nextafter(angles.hi + s_hi, np.inf),
-            )
-
-        lo, hi = shifted(k)
-        inside = (lo >= self.lo) & (hi <= self.hi) & (width < _TWO_PI_LO)
-        outside = width < _TWO_PI_LO
-        for j in (-2.0, -1.0, 0.0, 1.0, 2.0):
-            t_lo, t_hi = shifted(k + j)
-            outside &= (t_lo > self.hi) | (t_hi < self.lo)
-        out = np.full(n, STRADDLES, dtype=np.uint8)
-        out[inside] = INSIDE
-        out[outside & ~inside] = OUTSIDE
-        return out
+            return np.full(angles.lo.shape, INSIDE, dtype=np.uint8)
+        return classify_angles(angles, self.lo, self.hi)
 
     def wrap(self, angles: ArrayLike) -> NDArray[np.float64]:
         """Representatives of angles in ``[lo, lo + 2 pi)`` (in ``[-pi, pi)`` if unlimited)."""
@@ -106,3 +81,48 @@ class JointLimit:
         if self.periodic:
             return np.isfinite(np.asarray(angles, dtype=np.float64))
         return self.wrap(angles) <= self.hi
+
+
+def classify_angles(
+    angles: Interval, lo: ArrayLike, hi: ArrayLike
+) -> NDArray[np.uint8]:
+    """Whether every angle of each interval lies in ``[lo, hi]`` modulo 2 pi (``INSIDE``),
+    none does (``OUTSIDE``), or it cannot tell (``STRADDLES``).
+
+    ``angles`` are unwrapped intervals; ``lo`` and ``hi`` (scalars or arrays) are
+    bounds of ranges at most one turn wide.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability.intervals import Interval
+    >>> classify_angles(Interval([0.1, 6.4], [0.2, 6.5]), [0.0, 0.0], [1.0, 0.1]).tolist()
+    [1, 2]
+    """
+    lo_b = np.asarray(lo, dtype=np.float64)
+    hi_b = np.asarray(hi, dtype=np.float64)
+    width = angles.hi - angles.lo
+    # k turns bring the interval near [lo, lo + 2 pi); the tests below are sound for
+    # any k, the choice only makes them sharp
+    k = np.floor((angles.lo - lo_b) / _TWO_PI)
+    k = np.where(np.isfinite(k), -k, 0.0)
+
+    def shifted(turns: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        # the shift by `turns` turns is enclosed in [turns * 2pi_lo, turns * 2pi_hi]
+        s_lo = np.where(turns >= 0, turns * _TWO_PI_LO, turns * _TWO_PI_HI)
+        s_hi = np.where(turns >= 0, turns * _TWO_PI_HI, turns * _TWO_PI_LO)
+        return (
+            np.nextafter(angles.lo + s_lo, -np.inf),
+            np.nextafter(angles.hi + s_hi, np.inf),
+        )
+
+    a_lo, a_hi = shifted(k)
+    inside = (a_lo >= lo_b) & (a_hi <= hi_b) & (width < _TWO_PI_LO)
+    outside = width < _TWO_PI_LO
+    for j in (-2.0, -1.0, 0.0, 1.0, 2.0):
+        t_lo, t_hi = shifted(k + j)
+        outside &= (t_lo > hi_b) | (t_hi < lo_b)
+    out = np.full(np.broadcast(angles.lo, lo_b, hi_b).shape, STRADDLES, dtype=np.uint8)
+    out[inside] = INSIDE
+    out[outside & ~inside] = OUTSIDE
+    return out
