@@ -26,7 +26,7 @@ from .regions import RegionGraph, region_graph
 from .sheets import SheetTable, classify_sheets
 from .status import BOUNDARY, IN, OUT
 from .topology import adjacency
-from .tree import DEFAULT_MAX_LEAVES, HyperTree
+from .tree import HyperTree
 
 __all__ = ["Analysis", "Region", "analyze", "load_analysis"]
 
@@ -91,7 +91,7 @@ def analyze(
     mechanism: Mechanism | Mapping[str, Any] | str | os.PathLike[str],
     precision: float = 0.1,
     *,
-    max_leaves: int = DEFAULT_MAX_LEAVES,
+    max_leaves: int = 1 << 23,
     progress: Progress | None = None,
 ) -> Analysis:
     """Regions of feasible point-to-point motions of a mechanism.
@@ -129,9 +129,22 @@ def analyze(
         return np.where(dead, OUT, np.where(table.decided(), IN, BOUNDARY)).astype(np.uint8)
 
     # no merging: a parent is not certified by its children's certificates
-    tree = HyperTree.build(
-        lo, hi, classify, max_depth=depths, max_leaves=max_leaves, progress=progress, merge=False
-    )
+    try:
+        tree = HyperTree.build(
+            lo,
+            hi,
+            classify,
+            max_depth=depths,
+            max_leaves=max_leaves,
+            progress=progress,
+            merge=False,
+        )
+    except ResolutionError:
+        raise ResolutionError(
+            "precision",
+            f"a precision whose tree holds at most max_leaves={max_leaves} leaves",
+            precision,
+        ) from None
     return Analysis(mechanism, eps, tree)
 
 

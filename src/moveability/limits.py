@@ -83,9 +83,7 @@ class JointLimit:
         return self.wrap(angles) <= self.hi
 
 
-def classify_angles(
-    angles: Interval, lo: ArrayLike, hi: ArrayLike
-) -> NDArray[np.uint8]:
+def classify_angles(angles: Interval, lo: ArrayLike, hi: ArrayLike) -> NDArray[np.uint8]:
     """Whether every angle of each interval lies in ``[lo, hi]`` modulo 2 pi (``INSIDE``),
     none does (``OUTSIDE``), or it cannot tell (``STRADDLES``).
 

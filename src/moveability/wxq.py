@@ -58,8 +58,9 @@ class WxQRegion:
     cells: tuple[int, int]
 
 
-def _classify(mechanism: Mechanism, lo: Array, hi: Array) -> tuple[NDArray[np.uint8],
-                                                                    NDArray[np.int8]]:
+def _classify(
+    mechanism: Mechanism, lo: Array, hi: Array
+) -> tuple[NDArray[np.uint8], NDArray[np.int8]]:
     """Decided status (IN decided / OUT / BOUNDARY) and sign of det A of each cell."""
     k = len(mechanism.pose_names)
     x_lo, x_hi = lo[:, :k], hi[:, :k]
@@ -78,8 +79,7 @@ def _classify(mechanism: Mechanism, lo: Array, hi: Array) -> tuple[NDArray[np.ui
         # pinned: one branch inside the joint interval, the others outside
         which = np.full(n, -1)
         for b, r in enumerate(relation):
-            others_out = np.all([rr == OUTSIDE for j, rr in enumerate(relation) if j != b],
-                                axis=0)
+            others_out = np.all([rr == OUTSIDE for j, rr in enumerate(relation) if j != b], axis=0)
             which = np.where((r == INSIDE) & others_out, b, which)
         pinned &= regular & (which >= 0)
         chosen = np.clip(which, 0, None)
@@ -110,9 +110,13 @@ class WxQAnalysis:
         for s in (1, -1):
             # cells of this sign: IN if certified, BOUNDARY if they may hold such configurations
             per_sign = np.where(
-                status == OUT, OUT,
-                np.where((status == IN) & (sign == s), IN,
-                         np.where((status == IN) | ((sign != 0) & (sign != s)), OUT, BOUNDARY)),
+                status == OUT,
+                OUT,
+                np.where(
+                    (status == IN) & (sign == s),
+                    IN,
+                    np.where((status == IN) | ((sign != 0) & (sign != s)), OUT, BOUNDARY),
+                ),
             ).astype(np.uint8)
             signed = tree._replace(status=per_sign)
             labels, count = components(signed, status=IN | BOUNDARY, connectivity=tree.ndim)
@@ -122,12 +126,18 @@ class WxQAnalysis:
                 if not n_in:
                     continue
                 shadow = project(signed.select(cells), list(range(k)))
-                self.regions.append(WxQRegion(sign=s, area=measure(shadow),
-                                              cells=(n_in, int(cells.sum()) - n_in)))
+                self.regions.append(
+                    WxQRegion(sign=s, area=measure(shadow), cells=(n_in, int(cells.sum()) - n_in))
+                )
 
 
-def analyze_wxq(mechanism: Mechanism, precision: float = 0.2, *,
-                max_leaves: int = 1 << 24, joint_coarsening: int = 3) -> WxQAnalysis:
+def analyze_wxq(
+    mechanism: Mechanism,
+    precision: float = 0.2,
+    *,
+    max_leaves: int = 1 << 24,
+    joint_coarsening: int = 3,
+) -> WxQAnalysis:
     """Build the configuration space of ``mechanism`` in W x Q and find its regions.
 
     Pose axes are refined to ``precision``; joint axes to ``2 ** joint_coarsening``
@@ -151,8 +161,7 @@ def analyze_wxq(mechanism: Mechanism, precision: float = 0.2, *,
     fine = [int(max(0, np.ceil(np.log2(w / eps)))) for w in widths]
     # joint cells a few times wider than the turn of a sheet over a pose cell, so
     # that sheets fit in them (a sheet crossing a joint cell's face pins no leg)
-    depths = tuple(d if i < len(w_lo) else max(1, d - joint_coarsening)
-                   for i, d in enumerate(fine))
+    depths = tuple(d if i < len(w_lo) else max(1, d - joint_coarsening) for i, d in enumerate(fine))
     if sum(depths) > MAX_KEY_BITS:
         raise ResolutionError("precision", "a coarser precision for the W x Q tree", precision)
     k = len(mechanism.pose_names)
@@ -162,6 +171,7 @@ def analyze_wxq(mechanism: Mechanism, precision: float = 0.2, *,
         status, _ = _classify(mechanism, cell_lo, cell_hi)
         return status
 
-    tree = HyperTree.build(lo, hi, classify, max_depth=depths, periodic=periodic,
-                           max_leaves=max_leaves, merge=False)
+    tree = HyperTree.build(
+        lo, hi, classify, max_depth=depths, periodic=periodic, max_leaves=max_leaves, merge=False
+    )
     return WxQAnalysis(mechanism, eps, tree)

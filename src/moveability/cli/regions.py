@@ -43,16 +43,26 @@ def format_regions(data: Mapping[str, Any]) -> str:
         f"N-connected regions: {len(data['regions'])}",
     ]
     if data["regions"]:
+        signed = all("sign" in region for region in data["regions"])
         rows = [
             [
                 str(region["id"]),
+                *([("det A > 0" if region["sign"] > 0 else "det A < 0")] if signed else []),
                 _area(region["area"]),
                 options.three_valued(region["equals_workspace"]),
             ]
             for region in data["regions"]
         ]
-        lines.append(options.format_table(["region", "area", "equals workspace"], rows))
+        head = ["region", *(["sign"] if signed else []), "area", "equals workspace"]
+        lines.append(options.format_table(head, rows))
     lines.append(f"workspace N-connected: {options.three_valued(data['n_connected'])}")
+    undecided = data.get("undecided")
+    if undecided:
+        lines.append(
+            f"undecided at this precision: {undecided['boundary_area']:.6g} of area in "
+            f"undecided cells; {undecided['components']} possible region(s) without a "
+            f"certified part, {undecided['detached']} certified part(s) of unknown region"
+        )
     return "\n".join(lines)
 
 
