@@ -439,6 +439,11 @@ class Analysis:
         lines.append(f"W N-connected: {nc}")
         return "\n".join(lines)
 
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> Analysis:
+        """Read an analysis written by :meth:`save` (see :func:`load_analysis`)."""
+        return load_analysis(path)
+
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the analysis (mechanism spec, precision, tree) to a ``.npz`` file."""
         np.savez_compressed(

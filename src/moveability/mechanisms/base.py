@@ -40,6 +40,7 @@ __all__ = [
     "Leg",
     "LegReach",
     "Mechanism",
+    "interval_det",
 ]
 
 REACH_OUT, REGULAR, FOLD_OUTER, FOLD_INNER, REACH_UNKNOWN = 0, 1, 2, 3, 4
@@ -86,7 +87,38 @@ class Leg(Protocol):
 
     def serial_term(self, points: Array, angles: Array) -> Array: ...
 
+    def a_row(self, points: Array, angles: Array) -> Array: ...
+
+    def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]: ...
+
     def reach(self, lo: Array, hi: Array) -> LegReach: ...
+
+
+def interval_det(rows: list[list[Interval]]) -> Interval:
+    """Enclosure of the determinant of a square matrix of intervals (cofactor expansion).
+
+    Examples
+    --------
+    >>> from moveability.intervals import Interval
+    >>> d = interval_det([[Interval(1.0), Interval(2.0)], [Interval(3.0), Interval(4.0)]])
+    >>> bool(d.lo <= -2.0 <= d.hi)
+    True
+    """
+    n = len(rows)
+    if n == 1:
+        return rows[0][0]
+    total: Interval | None = None
+    for j in range(n):
+        minor = [row[:j] + row[j + 1 :] for row in rows[1:]]
+        term = rows[0][j] * interval_det(minor)
+        if total is None:
+            total = term
+        elif j % 2:
+            total = total - term
+        else:
+            total = total + term
+    assert total is not None
+    return total
 
 
 class Mechanism:
@@ -138,7 +170,10 @@ class Mechanism:
         return np.prod(np.stack(terms, axis=-1), axis=-1)
 
     def det_a(self, points: Array, joints: Array) -> Array:
-        raise NotImplementedError
+        """det A at points and joint angles (one posture each): the legs' rows stacked."""
+        rows = [leg.a_row(points, joints[..., i]) for i, leg in enumerate(self.legs)]
+        with np.errstate(invalid="ignore"):  # NaN rows of unreachable poses give NaN
+            return np.asarray(np.linalg.det(np.stack(rows, axis=-2)), dtype=np.float64)
 
     def to_spec(self) -> dict[str, object]:
         """The spec mapping that rebuilds this mechanism."""
@@ -147,7 +182,8 @@ class Mechanism:
     # ----------------------------------------------------------------- boxes
     def det_a_boxes(self, lo: Array, hi: Array, angles: list[Interval]) -> Interval:
         """Enclosure of det A over boxes of poses with joint-angle enclosures per leg."""
-        raise NotImplementedError
+        rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.legs)]
+        return interval_det(rows)
 
     def folds_connected(self, legs: tuple[int, ...], lo: Array, hi: Array) -> NDArray[np.bool_]:
         """Where several legs fold in one box: whether their configurations all join.

@@ -10,9 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .. import intervals as iv
 from ..errors import InvalidParameterError
-from ..intervals import Interval
 from ..limits import JointLimit
 from .base import Mechanism
 from .rr_leg import RRLeg
@@ -97,26 +95,6 @@ class FiveBar(Mechanism):
     def __repr__(self) -> str:
         lengths = ", ".join(f"L{i}={v:g}" for i, v in enumerate(self.lengths))
         return f"FiveBar({lengths}, limits={self.limits})"
-
-    # ---------------------------------------------------------------- points
-    def det_a(self, points: Array, joints: Array) -> Array:
-        """``(P - C) x (P - D)`` at points and joint angles (one posture each)."""
-        p = np.asarray(points, dtype=np.float64)
-        c = self.rr_legs[0].elbow(joints[..., 0])
-        d = self.rr_legs[1].elbow(joints[..., 1])
-        u, v = p - c, p - d
-        return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
-
-    # ----------------------------------------------------------------- boxes
-    def det_a_boxes(self, lo: Array, hi: Array, angles: list[Interval]) -> Interval:
-        px = Interval(lo[:, 0], hi[:, 0])
-        py = Interval(lo[:, 1], hi[:, 1])
-        leg1, leg2 = self.rr_legs
-        ux = px - (iv.cos(angles[0]) * leg1.proximal + leg1.base[0])
-        uy = py - (iv.sin(angles[0]) * leg1.proximal + leg1.base[1])
-        vx = px - (iv.cos(angles[1]) * leg2.proximal + leg2.base[0])
-        vy = py - (iv.sin(angles[1]) * leg2.proximal + leg2.base[1])
-        return ux * vy - uy * vx
 
     def folds_connected(self, legs: tuple[int, ...], lo: Array, hi: Array) -> NDArray[np.bool_]:
         """Both legs stretched in one box: certified where the box holds a crossing

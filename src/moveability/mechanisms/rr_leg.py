@@ -92,6 +92,17 @@ class RRLeg:
         theta = np.arctan2(d[:, 1], d[:, 0])
         return np.stack([theta + alpha, theta - alpha], axis=1)
 
+    def a_row(self, points: Array, angles: Array) -> Array:
+        """The leg's row of A, ``dF/dP / 2 = P - C(t)``, shape (..., 2)."""
+        return np.asarray(points, dtype=np.float64) - self.elbow(angles)
+
+    def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]:
+        """Enclosure of the row of A over boxes of poses and an angle enclosure."""
+        return [
+            Interval(lo[:, 0], hi[:, 0]) - (iv.cos(angles) * self.proximal + self.base[0]),
+            Interval(lo[:, 1], hi[:, 1]) - (iv.sin(angles) * self.proximal + self.base[1]),
+        ]
+
     def serial_term(self, points: Array, angles: Array) -> Array:
         """The leg's term of B, ``-(P - C) x (C - base)``: zero at a serial singularity."""
         c = self.elbow(angles)
