@@ -294,6 +294,35 @@ class Analysis:
             raise InvalidParameterError(f"points[{i}]", "finite coordinates", p[i].tolist())
         return p
 
+    def _point_table(self, p: NDArray[np.float64]) -> SheetTable:
+        """Sheet certificates at the points themselves (degenerate boxes)."""
+        return classify_sheets(self.mechanism, p, p)
+
+    def _locate_leaves(self, p: NDArray[np.float64]) -> tuple[NDArray[np.uint8], NDArray[np.intp]]:
+        return locate(self.tree, p)
+
+    def plan(self, points: ArrayLike, step: float | None = None) -> dict[str, Any]:
+        """A continuous motion through the poses in order, inside one region.
+
+        Consecutive configurations are at most ``step`` (default: the precision)
+        apart in pose and in each joint; every configuration satisfies the
+        constraints, keeps the region's sign of det A and respects the limits.
+        Raises :class:`moveability.planning.PlanningError` (exit 3 in the CLI)
+        when no region is known to hold every pose.
+
+        Examples
+        --------
+        >>> from moveability import analyze
+        >>> from moveability.mechanisms import FiveBar
+        >>> result = analyze(FiveBar(), precision=0.2)
+        >>> motion = result.plan([[1.0, 3.0], [5.0, 3.0]])
+        >>> motion["feasible"], motion["path"][0]["pose"]
+        (True, [1.0, 3.0])
+        """
+        from .planning import plan_motion
+
+        return plan_motion(self, self._points(points), step)
+
     def _point_answers(
         self, p: NDArray[np.float64]
     ) -> tuple[NDArray[np.int8], NDArray[np.int8], NDArray[np.intp]]:

@@ -48,12 +48,16 @@ class RegionGraph:
         Sign of det A in each certain component.
     n_possible : tuple of int
         Number of possible components of each sign.
+    certain_edges : (m, 2) int64
+        The certain graph's edges, for planning motions along it.
     """
 
     certain: NDArray[np.int64]
     possible: NDArray[np.int64]
     certain_sign: NDArray[np.int8]
     n_possible: tuple[int, int]
+    #: (m, 2) node pairs of the certain graph (node = leaf * P + posture)
+    certain_edges: NDArray[np.int64]
 
 
 def _components(
@@ -116,7 +120,8 @@ def region_graph(
         ok &= table.sign[:, p] == table.sign[:, q]
         idx = np.flatnonzero(ok)
         edges.append(np.stack([node[idx, p], node[idx, q]], axis=1))
-    certain, n_certain = _components(n * n_post, np.concatenate(edges), certified.ravel())
+    certain_edges = np.concatenate(edges)
+    certain, n_certain = _components(n * n_post, certain_edges, certified.ravel())
     certain_sign = np.zeros(n_certain, dtype=np.int8)
     labelled = certain >= 0
     certain_sign[certain[labelled]] = table.sign.ravel()[labelled]
@@ -143,5 +148,6 @@ def region_graph(
         certain=certain.reshape(n, n_post),
         possible=possible.reshape(2, n, n_post),
         certain_sign=certain_sign,
+        certain_edges=certain_edges,
         n_possible=(counts[0], counts[1]),
     )

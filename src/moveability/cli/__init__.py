@@ -1,6 +1,7 @@
 """Command-line interface: ``moveability``.
 
-One module per command (:mod:`.regions`, :mod:`.locate`, :mod:`.feasible`),
+One module per command (:mod:`.regions`, :mod:`.locate`, :mod:`.feasible`,
+:mod:`.plan`),
 shared options in :mod:`.options`. Results go to stdout (a summary, or JSON
 with ``--json -``), logs to stderr. Bad input exits with status 2 and the one
 line ``Error: <message>`` on stderr.
@@ -23,6 +24,7 @@ from .. import __version__
 from . import options
 from .feasible import feasible_command
 from .locate import locate_command
+from .plan import plan_command
 from .regions import regions_command
 
 __all__ = ["main"]
@@ -42,3 +44,4 @@ def main(ctx: click.Context, verbose: int, quiet: int) -> None:
 main.add_command(regions_command)
 main.add_command(locate_command)
 main.add_command(feasible_command)
+main.add_command(plan_command)

@@ -91,6 +91,8 @@ class Leg(Protocol):
 
     def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]: ...
 
+    def fold_waypoints(self, lo: Array, hi: Array, status: int) -> tuple[Array, Array]: ...
+
     def reach(self, lo: Array, hi: Array) -> LegReach: ...
 
 
@@ -184,6 +186,18 @@ class Mechanism:
         """Enclosure of det A over boxes of poses with joint-angle enclosures per leg."""
         rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.legs)]
         return interval_det(rows)
+
+    def fold_waypoints(
+        self, legs: tuple[int, ...], lo: Array, hi: Array, statuses: tuple[int, ...]
+    ) -> tuple[Array, Array]:
+        """Hub and fold point of one box where ``legs`` fold (a certified fold group).
+
+        Every reachable pose of the box joins the hub by a segment, and the hub
+        joins the fold point, where the postures of the group meet.
+        """
+        if len(legs) == 1:
+            return self.legs[legs[0]].fold_waypoints(lo, hi, statuses[0])
+        raise NotImplementedError("no fold waypoints for several legs")
 
     def folds_connected(self, legs: tuple[int, ...], lo: Array, hi: Array) -> NDArray[np.bool_]:
         """Where several legs fold in one box: whether their configurations all join.

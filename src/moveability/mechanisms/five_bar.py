@@ -96,6 +96,30 @@ class FiveBar(Mechanism):
         lengths = ", ".join(f"L{i}={v:g}" for i, v in enumerate(self.lengths))
         return f"FiveBar({lengths}, limits={self.limits})"
 
+    def _crossings(self) -> list[Array]:
+        """The points where the two outer circles cross."""
+        L0 = self.lengths[0]
+        r1 = self.rr_legs[0].proximal + self.rr_legs[0].distal
+        r2 = self.rr_legs[1].proximal + self.rr_legs[1].distal
+        x = (r1 * r1 - r2 * r2 + L0 * L0) / (2 * L0)
+        if r1 * r1 - x * x <= 0:
+            return []
+        y = float(np.sqrt(r1 * r1 - x * x))
+        return [np.array([x, y]), np.array([x, -y])]
+
+    def fold_waypoints(
+        self, legs: tuple[int, ...], lo: Array, hi: Array, statuses: tuple[int, ...]
+    ) -> tuple[Array, Array]:
+        if len(legs) == 1:
+            return super().fold_waypoints(legs, lo, hi, statuses)
+        for point in self._crossings():
+            if (lo <= point).all() and (point <= hi).all():
+                # pull it into both disks by a hair, so both legs reach it
+                inward = point - 0.5 * (np.array([0.0, 0.0]) + np.array([self.lengths[0], 0.0]))
+                inner = point - 1e-11 * inward / np.linalg.norm(inward)
+                return inner, inner
+        raise ValueError("the box holds no crossing of the outer circles")
+
     def folds_connected(self, legs: tuple[int, ...], lo: Array, hi: Array) -> NDArray[np.bool_]:
         """Both legs stretched in one box: certified where the box holds a crossing
         point of the two outer circles (all four postures meet there, and the

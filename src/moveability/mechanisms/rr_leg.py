@@ -167,6 +167,38 @@ class RRLeg:
             fold_connected=fold_connected,
         )
 
+    def fold_waypoints(self, lo: Array, hi: Array, status: int) -> tuple[Array, Array]:
+        """A hub and a fold point of one box where the leg folds (see :meth:`reach`).
+
+        The reachable part of the box is star-shaped about the hub, and the fold
+        point is a reachable pose of the box where the two branches meet, so a
+        motion can go from any reachable pose to the hub, to the fold point
+        (where the posture may change), and back.
+        """
+        base = np.asarray(self.base)
+        near = np.clip(base, lo, hi)
+        far = np.where(np.abs(lo - base) > np.abs(hi - base), lo, hi)
+        a, b = self.proximal, self.distal
+        radius = a + b if status == FOLD_OUTER else abs(a - b)
+        # the distance to the base decreases from the far corner to the nearest point:
+        # bisect for the circle, keeping the reachable end
+        t_lo, t_hi = 0.0, 1.0  # reachable side at t_lo (far corner for an inner fold)
+        if status == FOLD_OUTER:
+            start, end = near, far
+        else:
+            start, end = far, near
+        for _ in range(200):
+            mid = 0.5 * (t_lo + t_hi)
+            rho = np.hypot(*(start + mid * (end - start) - base))
+            inside = rho <= radius if status == FOLD_OUTER else rho >= radius
+            if inside:
+                t_lo = mid
+            else:
+                t_hi = mid
+        fold = start + t_lo * (end - start)
+        hub = fold if status == FOLD_OUTER else far
+        return hub, fold
+
     def _direction(self, lo: Array, hi: Array) -> Interval:
         """Enclosure of the direction of ``P - base`` over each box, unwrapped near its centre."""
         base = np.asarray(self.base)

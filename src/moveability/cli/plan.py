@@ -1,0 +1,76 @@
+"""``moveability plan``: a motion through a list of poses, inside one region."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping
+from typing import Any
+
+import click
+
+from . import options
+
+__all__ = ["format_plan", "plan_command"]
+
+#: exit status when no certified motion joins the poses
+NO_MOTION = 3
+
+
+def format_plan(data: Mapping[str, Any]) -> str:
+    """A summary for people of the JSON of ``moveability plan``.
+
+    Examples
+    --------
+    >>> print(format_plan({"feasible": True, "region": 0, "path": [
+    ...     {"pose": [1.0, 3.0], "joints": [1.5, 2.0], "posture": "+-"},
+    ...     {"pose": [1.1, 3.0], "joints": [1.49, 1.98], "posture": "++"}]}))
+    motion in N-connected region 0: 2 configurations, 1 posture change(s)
+    start  pose (1, 3) joints (1.5, 2) posture +-
+    end    pose (1.1, 3) joints (1.49, 1.98) posture ++
+    """
+    path = data["path"]
+    changes = sum(1 for a, b in itertools.pairwise(path) if a["posture"] != b["posture"])
+
+    def show(c: Mapping[str, Any]) -> str:
+        pose = ", ".join(f"{v:.6g}" for v in c["pose"])
+        joints = ", ".join(f"{v:.6g}" for v in c["joints"])
+        return f"pose ({pose}) joints ({joints}) posture {c['posture']}"
+
+    return "\n".join(
+        [
+            f"motion in N-connected region {data['region']}: {len(path)} configurations, "
+            f"{changes} posture change(s)",
+            f"start  {show(path[0])}",
+            f"end    {show(path[-1])}",
+        ]
+    )
+
+
+@click.command("plan")
+@options.spec_argument
+@options.points_argument
+@options.precision_option
+@options.json_options
+def plan_command(
+    spec: str, points: str, precision: float, json_out: str | None, overwrite: bool
+) -> None:
+    """A continuous motion through the poses of POINTS, in order, inside one
+    region (no parallel singularity, no joint limit crossed).
+
+    Consecutive configurations are at most the precision apart in pose and in
+    each joint. Exits with status 3, saying which poses are apart, when no
+    region is known to hold them all.
+    """
+    from ..planning import PlanningError
+
+    options.check_output(json_out, overwrite)
+    with options.reporting_errors():
+        mechanism = options.load_mechanism(spec)
+        poses = options.read_points(points, mechanism.pose_names)
+        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        try:
+            data = result.plan(poses)
+        except PlanningError as error:
+            click.echo(f"Error: no motion: {error}", err=True)
+            raise SystemExit(NO_MOTION) from None
+    options.write_output(data, json_out, overwrite, format_plan)

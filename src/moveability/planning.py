@@ -1,0 +1,232 @@
+"""Planning a motion through given poses inside one region R_j.
+
+The motion follows a shortest chain of the certain graph (see
+:mod:`moveability.regions`) between certified sheets holding the poses. Within
+a leaf whose sheet is certified the pose moves along straight segments (the
+leaf is convex, and every configuration of the sheet over it is valid). Within
+a leaf where a leg folds, it moves through the mechanism's hub and fold point
+of the leaf, and the posture changes at the fold point, where the branches
+meet. Joint angles come from the closed-form inverse kinematics of the current
+posture; segments are subdivided until consecutive configurations are at most
+``step`` apart in pose and in every joint.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import breadth_first_order
+
+from .errors import MoveabilityError
+from .mechanisms.base import REGULAR
+from .status import IN
+
+if TYPE_CHECKING:
+    from .analysis import Analysis
+
+__all__ = ["PlanningError", "plan_motion"]
+
+Array = NDArray[np.float64]
+
+
+class PlanningError(MoveabilityError):
+    """No certified motion joins the poses (they lie in no common region, or the
+    precision cannot tell)."""
+
+
+def _graph(analysis: Analysis) -> Any:
+    cached = getattr(analysis, "_planning_graph", None)
+    if cached is None:
+        n = analysis.graph.certain.size
+        e = analysis.graph.certain_edges
+        cached = coo_matrix(
+            (np.ones(e.shape[0], dtype=np.int8), (e[:, 0], e[:, 1])), shape=(n, n)
+        ).tocsr()
+        analysis._planning_graph = cached  # type: ignore[attr-defined]
+    return cached
+
+
+def _start_nodes(analysis: Analysis, point: Array, leaf: int, component: int) -> list[int]:
+    """Certified nodes of ``component`` over ``leaf`` holding a configuration of ``point``."""
+    t, g = analysis.table, analysis.graph
+    n_post = t.status.shape[1]
+    point_table = analysis._point_table(point[None, :])
+    regular_here = bool((point_table.leg_status[0] == REGULAR).all())
+    nodes = []
+    for p in range(n_post):
+        if g.certain[leaf, p] != component:
+            continue
+        if t.status[leaf, p] == IN or (t.group[leaf, p] and regular_here):
+            nodes.append(leaf * n_post + p)
+    # prefer regular sheets
+    nodes.sort(key=lambda node: t.status[node // n_post, node % n_post] != IN)
+    return nodes
+
+
+def _route(analysis: Analysis, start: int, goal: int) -> list[int]:
+    _order, pred = breadth_first_order(
+        _graph(analysis), start, directed=False, return_predecessors=True
+    )
+    if pred[goal] < 0 and goal != start:
+        raise PlanningError("the certified part of the region does not join the poses")
+    path = [goal]
+    while path[-1] != start:
+        path.append(int(pred[path[-1]]))
+    return path[::-1]
+
+
+def _waypoints(
+    analysis: Analysis, nodes: list[int], begin: Array, end: Array
+) -> list[tuple[Array, int]]:
+    """Poses and postures between which the pose moves in straight segments.
+
+    Consecutive waypoints lie in one closed leaf: a leaf whose sheet is certified
+    is convex, and the reachable part of a fold leaf is star-shaped about its hub.
+    """
+    t = analysis.table
+    n_post = t.status.shape[1]
+    leaves = analysis.tree.leaves()
+
+    def fold(leaf: int) -> tuple[Array, Array] | None:
+        """Hub and fold point of a leaf where some leg folds, else None."""
+        if not t.folding[leaf].any():
+            return None
+        legs = tuple(int(i) for i in np.flatnonzero(t.folding[leaf]))
+        statuses = tuple(int(t.leg_status[leaf, i]) for i in legs)
+        return analysis.mechanism.fold_waypoints(legs, leaves.lo[leaf], leaves.hi[leaf], statuses)
+
+    out: list[tuple[Array, int]] = [(begin, nodes[0] % n_post)]
+    for u, v in itertools.pairwise(nodes):
+        lu, pu = divmod(u, n_post)
+        lv, pv = divmod(v, n_post)
+        here = fold(lu)
+        if lu == lv:
+            # a posture change inside a certified fold group, at the fold point
+            assert here is not None
+            hub, point = here
+            out += [(hub, pu), (point, pu), (point, pv), (hub, pv)]
+            continue
+        # through the middle of the face (edge, corner) the two leaves share
+        shared = 0.5 * (
+            np.maximum(leaves.lo[lu], leaves.lo[lv]) + np.minimum(leaves.hi[lu], leaves.hi[lv])
+        )
+        if here is not None:
+            out.append((here[0], pu))
+        out.append((shared, pu))
+    last_leaf, last_posture = divmod(nodes[-1], n_post)
+    here = fold(last_leaf)
+    if here is not None:
+        out.append((here[0], last_posture))
+    out.append((end, last_posture))
+    return out
+
+
+def _joints(analysis: Analysis, poses: Array, posture: int) -> Array:
+    q = analysis.mechanism.joint_angles(poses)[:, posture, :]
+    return q
+
+
+def _densify(
+    analysis: Analysis, a: Array, b: Array, posture: int, step: float
+) -> tuple[Array, Array]:
+    """Poses from a to b (a excluded) and their joints, consecutive ones within ``step``."""
+    n = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
+    s = np.linspace(0.0, 1.0, n + 1)
+    for _ in range(60):
+        poses = a + s[:, None] * (b - a)
+        q = _joints(analysis, poses, posture)
+        jump = np.abs(np.angle(np.exp(1j * np.diff(q, axis=0)))).max(axis=1)
+        bad = np.flatnonzero(jump > step)
+        if not bad.size:
+            return poses[1:], q[1:]
+        s = np.sort(np.concatenate([s, 0.5 * (s[bad] + s[bad + 1])]))
+    raise PlanningError("could not subdivide a segment to the requested step")
+
+
+def plan_motion(analysis: Analysis, points: Array, step: float | None = None) -> dict[str, Any]:
+    """A continuous motion through ``points`` in order, inside one region.
+
+    Returns ``{"feasible": True, "region": id, "path": [{"pose", "joints",
+    "posture"}, ...]}``. Raises :class:`PlanningError` when no region is known
+    to hold every pose.
+    """
+    answer = analysis.feasible(points)
+    if not answer["feasible"]:
+        raise PlanningError(_apart_message(analysis, points, answer["feasible"]))
+    region = analysis.regions[answer["region"]]
+    step = analysis.precision if step is None else float(step)
+    p = np.asarray(points, dtype=np.float64).reshape(-1, len(analysis.mechanism.pose_names))
+    _, leaf = analysis._locate_leaves(p)
+    component = region.certain
+    current = _start_nodes(analysis, p[0], int(leaf[0]), component)[0]
+    poses = [p[0][None, :]]
+    postures = [np.array([current % analysis.table.status.shape[1]])]
+    for i in range(1, p.shape[0]):
+        goals = _start_nodes(analysis, p[i], int(leaf[i]), component)
+        route = _route(analysis, current, goals[0])
+        waypoints = _waypoints(analysis, route, p[i - 1], p[i])
+        for (a, _), (b, posture) in itertools.pairwise(waypoints):
+            seg, _ = _densify(analysis, a, b, posture, step)
+            poses.append(seg)
+            postures.append(np.full(seg.shape[0], posture))
+        current = route[-1]
+    all_poses = np.concatenate(poses)
+    all_postures = np.concatenate(postures)
+    q = analysis.mechanism.joint_angles(all_poses)
+    joints = q[np.arange(all_poses.shape[0]), all_postures]
+    joints = _present(analysis, joints)
+    _check(analysis, all_poses, joints, region.sign)
+    return {
+        "feasible": True,
+        "region": region.id,
+        "path": [
+            {
+                "pose": [float(v) for v in all_poses[k]],
+                "joints": [float(v) for v in joints[k]],
+                "posture": analysis.mechanism.posture_name(int(all_postures[k])),
+            }
+            for k in range(all_poses.shape[0])
+        ],
+    }
+
+
+def _present(analysis: Analysis, joints: Array) -> Array:
+    """Joint values as the joints read them: in their range, or continuous if unlimited."""
+    out = joints.copy()
+    for i, lim in enumerate(analysis.mechanism.limits):
+        if lim.periodic:
+            out[:, i] = np.unwrap(joints[:, i])
+        else:
+            out[:, i] = lim.wrap(joints[:, i])
+    return out
+
+
+def _check(analysis: Analysis, poses: Array, joints: Array, sign: int) -> None:
+    m = analysis.mechanism
+    residual = np.abs(m.constraints(poses, joints)).max()
+    det = m.det_a(poses, joints)
+    within = all(lim.contains(joints[:, i]).all() for i, lim in enumerate(m.limits))
+    if not (residual <= 1e-9 and (np.sign(det) == sign).all() and within):
+        raise PlanningError(
+            f"internal check failed (residual {residual:.3g}, det A signs "
+            f"{sorted(set(np.sign(det).astype(int).tolist()))}, within limits {within})"
+        )
+
+
+def _apart_message(analysis: Analysis, points: Array, feasible: bool | None) -> str:
+    p = np.asarray(points, dtype=np.float64).reshape(-1, len(analysis.mechanism.pose_names))
+    located = analysis.locate(p)["points"]
+    outside = [i for i, a in enumerate(located) if a["workspace"] == "out"]
+    if outside:
+        return f"pose(s) {outside} lie outside the workspace"
+    if feasible is False:
+        for i in range(len(located)):
+            for j in range(i + 1, len(located)):
+                if analysis.feasible(p[[i, j]])["feasible"] is False:
+                    return f"poses {i} and {j} lie in no common region"
+        return "the poses lie in no common region"
+    return "the precision cannot tell whether one region holds every pose; try a finer precision"
