@@ -1,7 +1,7 @@
 """Command-line interface: ``moveability``.
 
 One module per command (:mod:`.regions`, :mod:`.locate`, :mod:`.feasible`,
-:mod:`.plan`),
+:mod:`.plan`, :mod:`.plot`),
 shared options in :mod:`.options`. Results go to stdout (a summary, or JSON
 with ``--json -``), logs to stderr. Bad input exits with status 2 and the one
 line ``Error: <message>`` on stderr.
@@ -25,6 +25,7 @@ from . import options
 from .feasible import feasible_command
 from .locate import locate_command
 from .plan import plan_command
+from .plot import plot_command
 from .regions import regions_command
 
 __all__ = ["main"]
@@ -45,3 +46,4 @@ main.add_command(regions_command)
 main.add_command(locate_command)
 main.add_command(feasible_command)
 main.add_command(plan_command)
+main.add_command(plot_command)

@@ -1,0 +1,95 @@
+"""``moveability plot``: one figure of the analysis, as PNG or SVG."""
+
+from __future__ import annotations
+
+import os
+
+import click
+import numpy as np
+
+from . import options
+
+__all__ = ["plot_command"]
+
+
+def _pose(text: str | None) -> np.ndarray | None:
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise options.InputError(f"invalid --pose: expected x,y numbers, got {text!r}") from None
+    if not np.isfinite(values).all():
+        raise options.InputError(f"invalid --pose: expected finite numbers, got {text!r}")
+    return np.array(values)
+
+
+@click.command("plot")
+@options.spec_argument
+@click.option(
+    "--figure",
+    "name",
+    required=True,
+    type=click.Choice(["workspace", "postures", "regions", "joint-space", "path"]),
+    help="Which figure.",
+)
+@click.option(
+    "--out",
+    "out",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="Output file: .png or .svg (.gif with --animate).",
+)
+@click.option("--pose", default=None, help="Pose x,y for the postures figure.")
+@click.option(
+    "--points",
+    default=None,
+    type=click.Path(dir_okay=False),
+    help="CSV of poses for the path figure (default: two poses of the largest region).",
+)
+@click.option("--animate", is_flag=True, help="With --figure path: write an animated GIF.")
+@click.option("--overwrite", is_flag=True, help="Replace --out if it exists.")
+@options.precision_option
+def plot_command(
+    spec: str,
+    name: str,
+    out: str,
+    pose: str | None,
+    points: str | None,
+    animate: bool,
+    overwrite: bool,
+    precision: float,
+) -> None:
+    """Draw one figure of the analysis of the manipulator of SPEC."""
+    from ..planning import PlanningError
+
+    ext = os.path.splitext(out)[1].lower()
+    allowed = (".gif",) if animate else (".png", ".svg")
+    if ext not in allowed:
+        raise options.InputError(
+            f"invalid --out: expected a {' or '.join(allowed)} file, got {out!r}"
+        )
+    if animate and name != "path":
+        raise options.InputError("invalid --animate: only the path figure is animated")
+    if os.path.exists(out) and not overwrite:
+        raise options.InputError(f"refusing to overwrite {out}: it exists (use --overwrite)")
+    at = _pose(pose)
+    with options.reporting_errors():
+        mechanism = options.load_mechanism(spec)
+        poses = options.read_points(points, mechanism.pose_names) if points else None
+        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        from ..plot import animate_path, figure
+
+        try:
+            if animate:
+                from ..plot import _default_points
+
+                motion = result.plan(poses if poses is not None else _default_points(result))
+                animate_path(result, motion, out)
+            else:
+                fig = figure(name, result, pose=at, points=poses)
+                fig.savefig(out, dpi=110, bbox_inches="tight")
+        except PlanningError as error:
+            click.echo(f"Error: no motion: {error}", err=True)
+            raise SystemExit(3) from None
+    click.echo(f"wrote {out}", err=True)
