@@ -1,19 +1,29 @@
 """The paper's analysis of the five-bar RR-RRR, certified (run by ``make demo``).
 
-For each of the paper's two joint-limit cases it prints the regions R_j, the
-areas of the N-connected regions W_Nj, whether the workspace W is N-connected,
-and a feasibility question with witness postures.
+For each of the paper's joint-limit cases it prints the regions R_j, the areas
+of the N-connected regions W_Nj, whether the workspace W is N-connected, and
+feasibility questions with witness postures; it writes every figure and an
+HTML report for each case to ``out/<case>/``.
 """
 
 from __future__ import annotations
 
 import sys
 import time
+
+import matplotlib
+
+matplotlib.use("Agg")
 from pathlib import Path
 
+import matplotlib.pyplot as plt
+
 from moveability import analyze, load_spec
+from moveability.plot import FIGURES, figure
+from moveability.report import write_report
 
 HERE = Path(__file__).parent
+OUT = HERE.parent / "out"
 PRECISION = 0.035
 # two poses of W in one region; two poses of W in different regions (like the
 # paper's X1 and X2); two poses near the top and bottom corners of W, where both
@@ -44,6 +54,13 @@ def main() -> None:
                 print(f" in region {answer['region']}, postures (t1, t2): {postures}")
             else:
                 print()
+        folder = OUT / path.stem
+        folder.mkdir(parents=True, exist_ok=True)
+        for name in FIGURES:
+            fig = figure(name, result)
+            fig.savefig(folder / f"{name}.png", dpi=100, bbox_inches="tight")
+            plt.close(fig)
+        print(f"  figures and report: {write_report(result, folder)}")
         print()
     sys.stdout.flush()
 

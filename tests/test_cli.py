@@ -462,3 +462,19 @@ def test_end_to_end_locate_and_feasible(real, tmp_path):
 
 def test_end_to_end_precision_too_fine(real):
     assert_bad_input(run(["regions", real, "--precision", "1e-300"]), "precision")
+
+
+def test_terminal_progress_line_appears_after_the_delay():
+    import io
+
+    from moveability.cli.options import _TerminalProgress
+
+    stream = io.StringIO()
+    quiet = _TerminalProgress(stream, delay=3600.0)
+    quiet(3, 10, 20)
+    assert stream.getvalue() == ""
+    shown = _TerminalProgress(stream, delay=0.0)
+    shown(4, 12, 40)
+    shown(5, 0, 52)
+    text = stream.getvalue()
+    assert "level 4" in text and "40 cells" in text and text.endswith("\n")

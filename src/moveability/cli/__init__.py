@@ -1,7 +1,8 @@
 """Command-line interface: ``moveability``.
 
 One module per command (:mod:`.regions`, :mod:`.locate`, :mod:`.feasible`,
-:mod:`.plan`, :mod:`.plot`),
+:mod:`.plan`, :mod:`.plot`,
+:mod:`.report`),
 shared options in :mod:`.options`. Results go to stdout (a summary, or JSON
 with ``--json -``), logs to stderr. Bad input exits with status 2 and the one
 line ``Error: <message>`` on stderr.
@@ -27,6 +28,7 @@ from .locate import locate_command
 from .plan import plan_command
 from .plot import plot_command
 from .regions import regions_command
+from .report import report_command
 
 __all__ = ["main"]
 
@@ -47,3 +49,4 @@ main.add_command(locate_command)
 main.add_command(feasible_command)
 main.add_command(plan_command)
 main.add_command(plot_command)
+main.add_command(report_command)

@@ -13,6 +13,7 @@ import logging
 import math
 import os
 import sys
+import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from typing import Any, TypeVar
@@ -150,26 +151,58 @@ def configure_logging(verbosity: int) -> None:
 
 
 def progress_reporter() -> Callable[..., None] | None:
-    """A progress callback that logs at INFO level, or ``None`` when that is not shown.
+    """A progress callback for the analysis, or ``None`` when nothing would show.
+
+    With ``-v`` every level is logged. Otherwise, when stderr is a terminal, a
+    one-line progress display appears once the analysis has run for a second
+    (and is cleared at the end of each level display); nothing is written when
+    stderr is not a terminal.
 
     Examples
     --------
     >>> configure_logging(0)
-    >>> progress_reporter() is None
+    >>> progress_reporter() is None  # stderr is not a terminal under the tests
     True
     """
-    if not logger.isEnabledFor(logging.INFO):
-        return None
+    if logger.isEnabledFor(logging.INFO):
 
-    def progress(*args: Any, **kwargs: Any) -> None:
-        # the analysis calls progress(level, n_split, n_leaves); log anything else as given
-        if len(args) == 3 and not kwargs:
-            logger.info("level %s: %s cells split, %s leaves", *args)
+        def log_progress(*args: Any, **kwargs: Any) -> None:
+            # the analysis calls progress(level, n_split, n_leaves)
+            if len(args) == 3 and not kwargs:
+                logger.info("level %s: %s cells split, %s leaves", *args)
+                return
+            parts = [str(arg) for arg in args] + [f"{k}={v}" for k, v in kwargs.items()]
+            logger.info("progress: %s", " ".join(parts))
+
+        return log_progress
+    stream = sys.stderr
+    if logger.isEnabledFor(logging.WARNING) and stream.isatty():
+        return _TerminalProgress(stream)
+    return None
+
+
+class _TerminalProgress:
+    """A single updating line on a terminal, shown after the first second."""
+
+    def __init__(self, stream: Any, delay: float = 1.0) -> None:
+        self.stream = stream
+        self.start = time.monotonic()
+        self.delay = delay
+        self.shown = False
+
+    def __call__(self, level: int, n_split: int, n_leaves: int) -> None:
+        elapsed = time.monotonic() - self.start
+        if elapsed < self.delay:
             return
-        parts = [str(arg) for arg in args] + [f"{key}={value}" for key, value in kwargs.items()]
-        logger.info("progress: %s", " ".join(parts))
-
-    return progress
+        self.shown = True
+        bar = "#" * min(int(level), 40)
+        self.stream.write(
+            f"\rrefining [{bar:<24.24}] level {level}, {n_leaves:,} cells, "
+            f"{n_split:,} to split, {elapsed:.1f} s "
+        )
+        if n_split == 0:
+            self.stream.write("\n")
+        self.stream.flush()
 
 
 # ------------------------------------------------------------------ errors

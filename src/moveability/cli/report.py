@@ -1,0 +1,33 @@
+"""``moveability report``: a self-contained HTML page of the analysis."""
+
+from __future__ import annotations
+
+import click
+
+from . import options
+
+__all__ = ["report_command"]
+
+
+@click.command("report")
+@options.spec_argument
+@click.option(
+    "--out",
+    "out",
+    required=True,
+    type=click.Path(file_okay=False),
+    help="Directory to write index.html into.",
+)
+@options.precision_option
+def report_command(spec: str, out: str, precision: float) -> None:
+    """Write OUT/index.html: the spec, the summary table and every figure.
+
+    The page embeds its figures and opens in a browser without a server.
+    """
+    with options.reporting_errors():
+        mechanism = options.load_mechanism(spec)
+        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        from ..report import write_report
+
+        path = write_report(result, out)
+    click.echo(path)
