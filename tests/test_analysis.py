@@ -72,8 +72,10 @@ class JointSpaceReference:
                 if ru != rv:
                     parent[max(ru, rv)] = min(ru, rv)
         roots = np.array([find(x) for x in range(count + 1)])
-        _, self.labels = np.unique(roots[labels], return_inverse=True)
-        self.labels = self.labels.reshape(labels.shape) - 1  # -1 outside D
+        kept = np.unique(roots[1:]) if count else np.zeros(0, dtype=int)
+        rank = np.full(count + 1, -1)
+        rank[kept] = np.arange(kept.size)
+        self.labels = np.where(labels > 0, rank[roots[labels]], -1)  # -1 outside D
         self.cd = cd
         self.n_components = int(self.labels.max()) + 1
 

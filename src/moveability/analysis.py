@@ -343,7 +343,9 @@ class Analysis:
             sure = (nodes_c & (t.status[lf] == IN)).any(axis=1)
             sure |= (nodes_c & t.group[lf]).any(axis=1) & point_regular
             touch = (g.possible[row][lf] == u).any(axis=1)
-            answers[:, j] = np.where(sure & inside_box, 1, np.where(~touch | ~inside_box, 0, -1))
+            # a pose outside the box is outside W (the box holds W); unless the pose
+            # itself is certified out, say so only through `ws` below
+            answers[:, j] = np.where(sure & inside_box, 1, np.where(~touch & inside_box, 0, -1))
         answers[ws == 0] = 0
         return ws, answers, np.where(inside_box, leaf, -1)
 
@@ -393,12 +395,13 @@ class Analysis:
                 }
         if (ws == 0).any():
             return {"feasible": False, "region": None, "postures": None}
+        if (leaf < 0).any():
+            # a pose outside the box that the pose-level test could not place
+            return {"feasible": None, "region": None, "postures": None}
         g = self.graph
-        lf = np.where(leaf >= 0, leaf, 0)
         for row in (0, 1):
             for u in range(g.n_possible[row]):
-                touch = (g.possible[row][lf] == u).any(axis=1) & (leaf >= 0)
-                if touch.all():
+                if (g.possible[row][leaf] == u).any(axis=1).all():
                     return {"feasible": None, "region": None, "postures": None}
         return {"feasible": False, "region": None, "postures": None}
 
@@ -407,7 +410,8 @@ class Analysis:
     ) -> list[list[float]]:
         c = self._region_nodes[j][0]
         g, t = self.graph, self.table
-        joints = self.mechanism.joint_angles(p)
+        # the poses are certified reachable: clip the rounding of the closed form
+        joints = self.mechanism.joint_angles(p, clip=True)
         out = []
         for i in range(p.shape[0]):
             ok = (g.certain[leaf[i]] == c) & ((t.status[leaf[i]] == IN) | t.group[leaf[i]])

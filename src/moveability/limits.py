@@ -107,8 +107,9 @@ def classify_angles(angles: Interval, lo: ArrayLike, hi: ArrayLike) -> NDArray[n
 
     def shifted(turns: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         # the shift by `turns` turns is enclosed in [turns * 2pi_lo, turns * 2pi_hi]
-        s_lo = np.where(turns >= 0, turns * _TWO_PI_LO, turns * _TWO_PI_HI)
-        s_hi = np.where(turns >= 0, turns * _TWO_PI_HI, turns * _TWO_PI_LO)
+        # (the products are rounded too: one more step outwards)
+        s_lo = np.nextafter(np.where(turns >= 0, turns * _TWO_PI_LO, turns * _TWO_PI_HI), -np.inf)
+        s_hi = np.nextafter(np.where(turns >= 0, turns * _TWO_PI_HI, turns * _TWO_PI_LO), np.inf)
         return (
             np.nextafter(angles.lo + s_lo, -np.inf),
             np.nextafter(angles.hi + s_hi, np.inf),

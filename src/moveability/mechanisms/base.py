@@ -81,7 +81,7 @@ class Leg(Protocol):
     @property
     def n_branches(self) -> int: ...
 
-    def angles(self, points: Array) -> Array: ...
+    def angles(self, points: Array, clip: bool = False) -> Array: ...
 
     def constraint(self, points: Array, angles: Array) -> Array: ...
 
@@ -154,9 +154,13 @@ class Mechanism:
         return "".join("+-"[b] if b < 2 else str(b) for b in self.postures[index])
 
     # ---------------------------------------------------------------- points
-    def joint_angles(self, points: Array) -> Array:
-        """Joint angles of every posture at each point, shape (m, n_postures, n_legs)."""
-        per_leg = [leg.angles(points) for leg in self.legs]
+    def joint_angles(self, points: Array, clip: bool = False) -> Array:
+        """Joint angles of every posture at each point, shape (m, n_postures, n_legs).
+
+        NaN where a leg cannot reach; ``clip`` forgives the rounding of poses
+        certified reachable (see the legs' ``angles``).
+        """
+        per_leg = [leg.angles(points, clip=clip) for leg in self.legs]
         post = self.postures
         return np.stack([per_leg[i][:, post[:, i]] for i in range(len(self.legs))], axis=-1)
 

@@ -10,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import intervals as iv
 from ..errors import InvalidParameterError
+from ..intervals import Interval
 from ..limits import JointLimit
 from .base import Mechanism
 from .rr_leg import RRLeg
@@ -68,16 +70,22 @@ class FiveBar(Mechanism):
         if len(limits) != 2:
             raise InvalidParameterError("limits", "two joint limits", limits)
         self.limits = tuple(limits)
-        r1, r2 = L1 + L2, L3 + L4
-        lo = np.array([max(-r1, L0 - r2), -min(r1, r2)], dtype=np.float64)
-        hi = np.array([min(r1, L0 + r2), min(r1, r2)], dtype=np.float64)
+        # the box holds the intersection of the legs' outer disks; sums are rounded
+        # outwards and the pad grows with the lengths, so no reachable pose is lost
+        up, down = (
+            (lambda v: float(np.nextafter(v, np.inf))),
+            (lambda v: float(np.nextafter(v, -np.inf))),
+        )
+        r1, r2 = up(L1 + L2), up(L3 + L4)
+        lo = np.array([down(max(-r1, down(L0 - r2))), -min(r1, r2)], dtype=np.float64)
+        hi = np.array([up(min(r1, up(L0 + r2))), min(r1, r2)], dtype=np.float64)
         if not (lo < hi).all():
             raise InvalidParameterError(
                 "parameters",
                 "lengths for which the two legs can meet (L0 < L1+L2+L3+L4)",
                 dict(zip(("L0", "L1", "L2", "L3", "L4"), self.lengths, strict=True)),
             )
-        pad = 1e-3 * (hi - lo)
+        pad = 1e-3 * (hi - lo) + 4 * np.spacing(max(float(L0), r1, r2))
         self.bounds = (lo - pad, hi + pad)
 
     def to_spec(self) -> dict[str, object]:
@@ -96,26 +104,32 @@ class FiveBar(Mechanism):
         lengths = ", ".join(f"L{i}={v:g}" for i, v in enumerate(self.lengths))
         return f"FiveBar({lengths}, limits={self.limits})"
 
-    def _crossings(self) -> list[Array]:
-        """The points where the two outer circles cross."""
+    def _crossings(self) -> list[Interval]:
+        """Enclosures (x, y intervals, as one Interval of shape (2,)) of the points
+        where the two outer circles cross; none when they may not cross."""
         L0 = self.lengths[0]
-        r1 = self.rr_legs[0].proximal + self.rr_legs[0].distal
-        r2 = self.rr_legs[1].proximal + self.rr_legs[1].distal
-        x = (r1 * r1 - r2 * r2 + L0 * L0) / (2 * L0)
-        if r1 * r1 - x * x <= 0:
+        r1 = iv.as_interval(self.rr_legs[0].proximal) + self.rr_legs[0].distal
+        r2 = iv.as_interval(self.rr_legs[1].proximal) + self.rr_legs[1].distal
+        x = (iv.square(r1) - iv.square(r2) + L0 * L0) / (2.0 * L0)
+        y2 = iv.square(r1) - iv.square(x)
+        if not y2.lo > 0:
             return []
-        y = float(np.sqrt(r1 * r1 - x * x))
-        return [np.array([x, y]), np.array([x, -y])]
+        y = iv.sqrt(y2)
+        return [
+            Interval(np.array([x.lo, y.lo]), np.array([x.hi, y.hi])),
+            Interval(np.array([x.lo, -y.hi]), np.array([x.hi, -y.lo])),
+        ]
 
     def fold_waypoints(
         self, legs: tuple[int, ...], lo: Array, hi: Array, statuses: tuple[int, ...]
     ) -> tuple[Array, Array]:
         if len(legs) == 1:
             return super().fold_waypoints(legs, lo, hi, statuses)
-        for point in self._crossings():
-            if (lo <= point).all() and (point <= hi).all():
+        for crossing in self._crossings():
+            if (lo < crossing.lo).all() and (crossing.hi < hi).all():
+                point = crossing.mid
                 # pull it into both disks by a hair, so both legs reach it
-                inward = point - 0.5 * (np.array([0.0, 0.0]) + np.array([self.lengths[0], 0.0]))
+                inward = point - np.array([0.5 * self.lengths[0], 0.0])
                 inner = point - 1e-11 * inward / np.linalg.norm(inward)
                 return inner, inner
         raise ValueError("the box holds no crossing of the outer circles")
@@ -127,19 +141,7 @@ class FiveBar(Mechanism):
         out = np.zeros(lo.shape[0], dtype=bool)
         if tuple(sorted(legs)) != (0, 1):
             return out
-        L0 = self.lengths[0]
-        r1 = self.rr_legs[0].proximal + self.rr_legs[0].distal
-        r2 = self.rr_legs[1].proximal + self.rr_legs[1].distal
-        x = (r1 * r1 - r2 * r2 + L0 * L0) / (2 * L0)
-        if r1 * r1 - x * x <= 0:
-            return out
-        y = np.sqrt(r1 * r1 - x * x)
-        margin = 1e-9 * max(r1, r2, L0)
-        for yy in (y, -y):
-            out |= (
-                (lo[:, 0] + margin < x)
-                & (x < hi[:, 0] - margin)
-                & (lo[:, 1] + margin < yy)
-                & (yy < hi[:, 1] - margin)
-            )
+        for crossing in self._crossings():
+            # the box must hold the whole enclosure of the crossing, strictly
+            out |= ((lo < crossing.lo) & (crossing.hi < hi)).all(axis=1)
         return out

@@ -76,10 +76,12 @@ class RRLeg:
         d = np.asarray(points, dtype=np.float64) - self.elbow(angles)
         return (d**2).sum(axis=-1) - self.distal**2
 
-    def angles(self, points: Array) -> Array:
+    def angles(self, points: Array, clip: bool = False) -> Array:
         """Joint angle of each branch at each point, shape (m, 2); NaN where unreachable.
 
-        Branch 0 is ``theta + alpha``, branch 1 ``theta - alpha``.
+        Branch 0 is ``theta + alpha``, branch 1 ``theta - alpha``. With ``clip``,
+        poses beyond the reach by rounding only (1e-12 relative) get the folded
+        configuration instead of NaN: for poses already certified reachable.
         """
         p = np.asarray(points, dtype=np.float64)
         d = p - np.asarray(self.base)
@@ -87,7 +89,7 @@ class RRLeg:
         a, b = self.proximal, self.distal
         with np.errstate(divide="ignore", invalid="ignore"):
             g = (rho**2 + a * a - b * b) / (2 * a * rho)
-        ok = np.abs(g) <= 1.0
+        ok = np.abs(g) <= (1.0 + 1e-12 if clip else 1.0)
         alpha = np.where(ok, np.arccos(np.clip(g, -1.0, 1.0)), np.nan)
         theta = np.arctan2(d[:, 1], d[:, 0])
         return np.stack([theta + alpha, theta - alpha], axis=1)
