@@ -128,6 +128,17 @@ def analyze(
         dead = (table.status == OUT).all(axis=1)
         return np.where(dead, OUT, np.where(table.decided(), IN, BOUNDARY)).astype(np.uint8)
 
+    n_levels = max(depths)
+
+    def watch(level: int, n_split: int, n_leaves: int) -> None:
+        # undecided cells follow curves in W: their number about doubles per level,
+        # so a precision that cannot fit is refused early, not after filling memory
+        remaining = n_levels - level - 1
+        if remaining > 0 and n_leaves + n_split * 4.0 * (2.0**remaining - 1) > 4 * max_leaves:
+            raise ResolutionError("max_depth", "a tree that fits", n_split)
+        if progress is not None:
+            progress(level, n_split, n_leaves)
+
     # no merging: a parent is not certified by its children's certificates
     try:
         tree = HyperTree.build(
@@ -136,7 +147,7 @@ def analyze(
             classify,
             max_depth=depths,
             max_leaves=max_leaves,
-            progress=progress,
+            progress=watch,
             merge=False,
         )
     except ResolutionError:
