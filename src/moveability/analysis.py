@@ -26,7 +26,7 @@ from .regions import RegionGraph, region_graph
 from .sheets import SheetTable, classify_sheets
 from .status import BOUNDARY, IN, OUT
 from .topology import adjacency
-from .tree import HyperTree
+from .tree import HyperTree, read_archive
 
 __all__ = ["Analysis", "Region", "analyze", "load_analysis"]
 
@@ -506,19 +506,7 @@ class Analysis:
 
 def load_analysis(path: str | os.PathLike[str]) -> Analysis:
     """Read an analysis written by :meth:`Analysis.save` (the sheets are re-certified)."""
-    try:
-        with open(path, "rb") as handle:
-            data = np.load(handle, allow_pickle=False)
-            if not hasattr(data, "files"):
-                raise ValueError("not an .npz archive")
-            with data:
-                fields = {name: data[name] for name in data.files}
-    except FileNotFoundError:
-        raise InvalidParameterError("path", "an existing file", os.fspath(path)) from None
-    except Exception as exc:
-        raise InvalidParameterError(
-            "path", "a file written by Analysis.save", f"{os.fspath(path)} ({exc})"
-        ) from None
+    fields = read_archive(path, "a file written by Analysis.save")
     if str(fields.get("format", "")) != _FORMAT:
         raise InvalidParameterError("path", "a file written by Analysis.save", os.fspath(path))
     mechanism = from_spec(json.loads(str(fields["spec"])))

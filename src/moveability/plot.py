@@ -56,6 +56,14 @@ def _figure_of(ax: Axes) -> Figure:
     return cast("Figure", ax.figure)
 
 
+def _panels(n: int, max_cols: int, size: float) -> list[Axes]:
+    """A grid of ``n`` panels (at most ``max_cols`` per row), as a flat list of axes."""
+    cols = min(n, max_cols)
+    rows = int(np.ceil(n / cols))
+    _, grid = _pyplot().subplots(rows, cols, figsize=(size * cols, size * rows), squeeze=False)
+    return list(grid.ravel())
+
+
 def _axes(ax: Axes | None, **kwargs: Any) -> tuple[Figure, Axes]:
     if ax is not None:
         return ax.figure, ax  # type: ignore[return-value]
@@ -203,10 +211,7 @@ def plot_postures(
     q = mechanism.joint_angles(p)[0]
     n = q.shape[0]
     if axes is None:
-        cols = min(n, 4)
-        rows = int(np.ceil(n / cols))
-        _, grid = _pyplot().subplots(rows, cols, figsize=(4 * cols, 4 * rows), squeeze=False)
-        axes = list(grid.ravel())
+        axes = _panels(n, 4, 4)
     fig = _figure_of(axes[0])
     scale = float(np.abs(np.concatenate(mechanism.bounds)).max())
     for k in range(n):
@@ -249,10 +254,7 @@ def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure
     regions = result.regions
     n = len(regions) + 1
     if axes is None:
-        cols = min(n, 3)
-        rows = int(np.ceil(n / cols))
-        _, grid = _pyplot().subplots(rows, cols, figsize=(5.5 * cols, 5.5 * rows), squeeze=False)
-        axes = list(grid.ravel())
+        axes = _panels(n, 3, 5.5)
     fig = _figure_of(axes[0])
     leaves = result.tree.leaves()
     g, t = result.graph, result.table
@@ -373,10 +375,7 @@ def plot_path(
     path = motion["path"]
     frames = _frames(motion, count)
     if axes is None:
-        cols = min(len(frames), 3)
-        rows = int(np.ceil(len(frames) / cols))
-        _, grid = _pyplot().subplots(rows, cols, figsize=(4.5 * cols, 4.5 * rows), squeeze=False)
-        axes = list(grid.ravel())
+        axes = _panels(len(frames), 3, 4.5)
     fig = _figure_of(axes[0])
     poses = np.array([c["pose"] for c in path])
     letters = "abcdefghijklmnopqrstuvwxyz"

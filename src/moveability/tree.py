@@ -529,20 +529,7 @@ def load(path: str | os.PathLike[str]) -> HyperTree:
     >>> bool(load(path) == tree)
     True
     """
-    try:
-        # open the file here: np.load leaves it open when the archive is corrupt
-        with open(path, "rb") as handle:
-            data = np.load(handle, allow_pickle=False)
-            if not hasattr(data, "files"):  # a .npy array, not an archive
-                raise ValueError("not an .npz archive")
-            with data:
-                fields = {name: data[name] for name in data.files}
-    except FileNotFoundError:
-        raise InvalidParameterError("path", "an existing .npz file", os.fspath(path)) from None
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        raise InvalidParameterError(
-            "path", "a .npz file written by HyperTree.save", f"{os.fspath(path)} ({exc})"
-        ) from None
+    fields = read_archive(path, "a .npz file written by HyperTree.save")
     needed = ("format", "version", "lo", "hi", "max_depth", "periodic", "keys", "levels", "status")
     missing = [name for name in needed if name not in fields]
     if missing or str(fields["format"]) != _FORMAT:
@@ -566,6 +553,22 @@ def load(path: str | os.PathLike[str]) -> HyperTree:
     )
     _check_partition(tree, os.fspath(path))
     return tree
+
+
+def read_archive(path: str | os.PathLike[str], what: str) -> dict[str, Any]:
+    """The arrays of a ``.npz`` archive; bad or missing files raise an error naming ``path``."""
+    try:
+        # open the file here: np.load leaves it open when the archive is corrupt
+        with open(path, "rb") as handle:
+            data = np.load(handle, allow_pickle=False)
+            if not hasattr(data, "files"):  # a .npy array, not an archive
+                raise ValueError("not an .npz archive")
+            with data:
+                return {name: data[name] for name in data.files}
+    except FileNotFoundError:
+        raise InvalidParameterError("path", "an existing .npz file", os.fspath(path)) from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise InvalidParameterError("path", what, f"{os.fspath(path)} ({exc})") from None
 
 
 def _check_partition(tree: HyperTree, where: str) -> None:
