@@ -93,6 +93,7 @@ def analyze(
     *,
     max_leaves: int = 1 << 23,
     progress: Progress | None = None,
+    generalized_aspects: bool = False,
 ) -> Analysis:
     """Regions of feasible point-to-point motions of a mechanism.
 
@@ -106,6 +107,10 @@ def analyze(
         Fail with :class:`~moveability.ResolutionError` rather than hold more leaves.
     progress : callable, optional
         Called as ``progress(level, n_split, n_leaves)`` while the tree grows.
+    generalized_aspects : bool, optional
+        Forbid serial singularities as well (det A != 0 and det B != 0): the
+        regions are then the generalized aspects, in which the posture never
+        changes.
 
     Examples
     --------
@@ -156,7 +161,7 @@ def analyze(
             f"a precision whose tree holds at most max_leaves={max_leaves} leaves",
             precision,
         ) from None
-    return Analysis(mechanism, eps, tree)
+    return Analysis(mechanism, eps, tree, generalized_aspects=generalized_aspects)
 
 
 class Analysis:
@@ -166,8 +171,15 @@ class Analysis:
     configuration exists, BOUNDARY where undecided at the precision.
     """
 
-    def __init__(self, mechanism: Mechanism, precision: float, tree: HyperTree) -> None:
+    def __init__(
+        self,
+        mechanism: Mechanism,
+        precision: float,
+        tree: HyperTree,
+        generalized_aspects: bool = False,
+    ) -> None:
         self.mechanism = mechanism
+        self.generalized_aspects = bool(generalized_aspects)
         self.precision = precision
         self.tree = tree
         leaves = tree.leaves()
@@ -176,7 +188,9 @@ class Analysis:
         live = np.flatnonzero(tree.status != OUT)
         pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=tree.ndim)
         self._n_live = live.size
-        self.graph: RegionGraph = region_graph(self.table, pairs, mechanism.postures)
+        self.graph: RegionGraph = region_graph(
+            self.table, pairs, mechanism.postures, cross_serial=not self.generalized_aspects
+        )
         self._resolve()
 
     # ------------------------------------------------------------ regions
@@ -452,6 +466,7 @@ class Analysis:
                 for r in self.regions
             ],
             "n_connected": self.n_connected,
+            "generalized_aspects": self.generalized_aspects,
             "undecided": self.undecided,
             "mechanism": self.mechanism.name,
             "leaves": len(self.tree),
@@ -495,6 +510,7 @@ class Analysis:
             format=np.array(_FORMAT),
             spec=np.array(json.dumps(self.mechanism.to_spec())),
             precision=np.array(self.precision),
+            generalized_aspects=np.array(self.generalized_aspects),
             lo=self.tree.lo,
             hi=self.tree.hi,
             max_depth=np.asarray(self.tree.max_depth),
@@ -518,4 +534,5 @@ def load_analysis(path: str | os.PathLike[str]) -> Analysis:
         fields["levels"],
         fields["status"],
     )
-    return Analysis(mechanism, float(fields["precision"]), tree)
+    aspects = bool(fields["generalized_aspects"]) if "generalized_aspects" in fields else False
+    return Analysis(mechanism, float(fields["precision"]), tree, generalized_aspects=aspects)

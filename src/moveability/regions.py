@@ -94,14 +94,24 @@ def _posture_pairs(postures: NDArray[np.int64]) -> list[tuple[int, int, NDArray[
 
 
 def region_graph(
-    table: SheetTable, pairs: NDArray[np.intp], postures: NDArray[np.int64]
+    table: SheetTable,
+    pairs: NDArray[np.intp],
+    postures: NDArray[np.int64],
+    cross_serial: bool = True,
 ) -> RegionGraph:
-    """Build both graphs from a sheet table and the touching leaf pairs."""
+    """Build both graphs from a sheet table and the touching leaf pairs.
+
+    With ``cross_serial=False`` no path may meet a serial singularity (det B = 0)
+    either: postures never change, and the components are the generalized
+    aspects (det A and det B of constant sign).
+    """
     n, n_post = table.status.shape
     node = np.arange(n * n_post, dtype=np.int64).reshape(n, n_post)
     a, b = pairs[:, 0], pairs[:, 1]
-    certified = (table.status == IN) | table.group
-    folding = table.folding
+    group = table.group if cross_serial else np.zeros_like(table.group)
+    certified = (table.status == IN) | group
+    # legs whose branches may meet in a leaf; none may be crossed without serial ones
+    folding = table.folding if cross_serial else np.zeros_like(table.folding)
 
     # ---------------------------------------------------------------- certain
     edges = []
@@ -116,7 +126,7 @@ def region_graph(
     for p, q, differ in _posture_pairs(postures):
         # members of one fold group: they differ only on legs folding in the leaf
         same_group = (~differ[None, :] | folding).all(axis=1)
-        ok = table.group[:, p] & table.group[:, q] & same_group
+        ok = group[:, p] & group[:, q] & same_group
         ok &= table.sign[:, p] == table.sign[:, q]
         idx = np.flatnonzero(ok)
         edges.append(np.stack([node[idx, p], node[idx, q]], axis=1))
