@@ -90,3 +90,22 @@ def test_aspects_lie_inside_regions():
         if aspect.area[0] > 1.0:
             assert owners, aspect
         assert all(regions.regions[o].sign == aspect.sign for o in owners)
+
+
+def test_cli_generalized_aspects_flag():
+    from click.testing import CliRunner
+
+    from moveability.cli import main
+
+    runner = CliRunner()
+    spec = "examples/five-bar-paper.toml"
+    plain = runner.invoke(main, ["regions", spec, "--precision", "0.1", "--json", "-"])
+    aspects = runner.invoke(
+        main, ["regions", spec, "--precision", "0.1", "--json", "-", "--generalized-aspects"]
+    )
+    assert plain.exit_code == aspects.exit_code == 0
+    import json
+
+    assert len(json.loads(plain.output)["regions"]) == 2
+    data = json.loads(aspects.output)
+    assert data["generalized_aspects"] is True and len(data["regions"]) == 9

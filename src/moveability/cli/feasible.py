@@ -39,8 +39,14 @@ def format_feasible(data: Mapping[str, Any]) -> str:
 @options.points_argument
 @options.precision_option
 @options.json_options
+@options.aspects_option
 def feasible_command(
-    spec: str, points: str, precision: float, json_out: str | None, overwrite: bool
+    spec: str,
+    points: str,
+    precision: float,
+    json_out: str | None,
+    overwrite: bool,
+    generalized_aspects: bool,
 ) -> None:
     """Whether the manipulator can move through every pose of POINTS without
     crossing a parallel singularity or a joint limit.
@@ -54,6 +60,11 @@ def feasible_command(
     with options.reporting_errors():
         mechanism = options.load_mechanism(spec)
         poses = options.read_points(points, mechanism.pose_names)
-        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        result = options.run_analysis(
+            mechanism,
+            precision,
+            options.progress_reporter(),
+            **options.analysis_options(generalized_aspects),
+        )
         data = result.feasible(poses)
     options.write_output(data, json_out, overwrite, format_feasible)

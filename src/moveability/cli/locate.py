@@ -47,8 +47,14 @@ def format_locate(data: Mapping[str, Any]) -> str:
 @options.points_argument
 @options.precision_option
 @options.json_options
+@options.aspects_option
 def locate_command(
-    spec: str, points: str, precision: float, json_out: str | None, overwrite: bool
+    spec: str,
+    points: str,
+    precision: float,
+    json_out: str | None,
+    overwrite: bool,
+    generalized_aspects: bool,
 ) -> None:
     """Whether each pose of POINTS is in the workspace and in each N-connected region.
 
@@ -60,6 +66,11 @@ def locate_command(
     with options.reporting_errors():
         mechanism = options.load_mechanism(spec)
         poses = options.read_points(points, mechanism.pose_names)
-        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        result = options.run_analysis(
+            mechanism,
+            precision,
+            options.progress_reporter(),
+            **options.analysis_options(generalized_aspects),
+        )
         data = result.locate(poses)
     options.write_output(data, json_out, overwrite, format_locate)

@@ -230,11 +230,29 @@ def make_mechanism(spec: Mapping[str, Any]) -> Any:
     return from_spec(spec)
 
 
-def run_analysis(mechanism: Any, precision: float, progress: Callable[..., None] | None) -> Any:
+def run_analysis(
+    mechanism: Any, precision: float, progress: Callable[..., None] | None, **options: Any
+) -> Any:
     """The analysis of ``mechanism`` (``moveability.analysis.analyze``)."""
     from ..analysis import analyze
 
-    return analyze(mechanism, precision=precision, progress=progress)
+    return analyze(mechanism, precision=precision, progress=progress, **options)
+
+
+def aspects_option(command: F) -> F:
+    """``--generalized-aspects``: forbid serial singularities too (det B != 0)."""
+    return click.option(
+        "--generalized-aspects",
+        "generalized_aspects",
+        is_flag=True,
+        help="Forbid serial singularities too: the regions become the generalized "
+        "aspects (det A and det B of constant sign; the posture never changes).",
+    )(command)
+
+
+def analysis_options(generalized_aspects: bool) -> dict[str, Any]:
+    """Keyword arguments of the analysis for the command-line flags that are set."""
+    return {"generalized_aspects": True} if generalized_aspects else {}
 
 
 def load_mechanism(spec_path: str) -> Any:

@@ -40,7 +40,11 @@ def format_regions(data: Mapping[str, Any]) -> str:
     lines = [
         f"precision: {data['precision']:g}",
         f"workspace area: {_area(data['workspace']['area'])}",
-        f"N-connected regions: {len(data['regions'])}",
+        (
+            f"generalized aspects: {len(data['regions'])}"
+            if data.get("generalized_aspects")
+            else f"N-connected regions: {len(data['regions'])}"
+        ),
     ]
     if data["regions"]:
         signed = all("sign" in region for region in data["regions"])
@@ -70,7 +74,10 @@ def format_regions(data: Mapping[str, Any]) -> str:
 @options.spec_argument
 @options.precision_option
 @options.json_options
-def regions_command(spec: str, precision: float, json_out: str | None, overwrite: bool) -> None:
+@options.aspects_option
+def regions_command(
+    spec: str, precision: float, json_out: str | None, overwrite: bool, generalized_aspects: bool
+) -> None:
     """The N-connected regions of the workspace of the manipulator of SPEC.
 
     SPEC is a TOML file naming the mechanism, its parameters and joint limits.
@@ -80,6 +87,11 @@ def regions_command(spec: str, precision: float, json_out: str | None, overwrite
     options.check_output(json_out, overwrite)
     with options.reporting_errors():
         mechanism = options.load_mechanism(spec)
-        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        result = options.run_analysis(
+            mechanism,
+            precision,
+            options.progress_reporter(),
+            **options.analysis_options(generalized_aspects),
+        )
         data = result.to_dict()
     options.write_output(data, json_out, overwrite, format_regions)
