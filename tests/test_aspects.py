@@ -59,9 +59,17 @@ def _posture_signs(name):
     return tuple(-1 if ch == "+" else 1 for ch in name)
 
 
-@pytest.mark.parametrize("lengths", [(7, 8, 5, 8, 5), (6, 5, 7, 5, 7)])
-def test_aspects_match_the_joint_space(lengths):
-    joint = JointLimit(0.0, np.pi)
+@pytest.mark.parametrize(
+    ("lengths", "limit"),
+    [
+        ((7, 8, 5, 8, 5), (0.0, np.pi)),
+        ((6, 5, 7, 5, 7), (0.0, np.pi)),
+        # stops at +-pi split aspects that unlimited joints would join
+        ((7, 8, 5, 8, 5), (-np.pi, np.pi)),
+    ],
+)
+def test_aspects_match_the_joint_space(lengths, limit):
+    joint = JointLimit(*limit)
     m = FiveBar(*lengths, limits=(joint, joint))
     ref = _reference(m)
     counts = set()

@@ -42,6 +42,25 @@ UNLIMITED = JointLimit.unlimited()
 N_GRID = 500
 
 
+def _possible_label(result, row, leaf, posture, point):
+    """Possible component of the sub-node holding the configuration of ``posture`` at
+    ``point``: the piece of each limited joint's range its value lies in."""
+    from moveability.regions import _pieces
+
+    g, t, m = result.graph, result.table, result.mechanism
+    q = m.joint_angles(point[None, :], clip=True)[0, posture]
+    slot = 0
+    for i, lim in enumerate(m.limits):
+        lo, hi, ok = _pieces(
+            t.angles_lo[leaf : leaf + 1, posture, i], t.angles_hi[leaf : leaf + 1, posture, i], lim
+        )
+        v = lim.wrap(q[i]) if not lim.periodic else q[i]
+        inside = [bool(ok[j, 0] and lo[j, 0] - 1e-9 <= v <= hi[j, 0] + 1e-9) for j in (0, 1)]
+        if not inside[0] and inside[1]:
+            slot |= 1 << i
+    return int(g.possible[row][leaf, posture * g.slots + slot])
+
+
 def _pi_fraction(digits: int = 80) -> Fraction:
     """pi to ``digits`` decimals (Machin's formula in integers)."""
     one = 10 ** (digits + 10)
@@ -205,7 +224,7 @@ def _check_analysis(m: FiveBar, precision: float, rng: np.random.Generator, n_pt
         if leaf[k] < 0:
             bad.append(("valid configuration outside the tree box", pts[k]))
             continue
-        u = int(g.possible[0 if sign[k, p] > 0 else 1][leaf[k], p])
+        u = _possible_label(result, 0 if sign[k, p] > 0 else 1, leaf[k], p, pts[k])
         if u < 0:
             bad.append(("valid configuration on a dead node", pts[k], p))
             continue

@@ -189,7 +189,11 @@ class Analysis:
         pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=tree.ndim)
         self._n_live = live.size
         self.graph: RegionGraph = region_graph(
-            self.table, pairs, mechanism.postures, cross_serial=not self.generalized_aspects
+            self.table,
+            pairs,
+            mechanism.postures,
+            cross_serial=not self.generalized_aspects,
+            limits=mechanism.limits,
         )
         self._resolve()
 
@@ -201,7 +205,8 @@ class Analysis:
         self._certain_to_possible = np.full(g.certain_sign.size, -1, dtype=np.int64)
         for row, s in enumerate((1, -1)):
             mask = (g.certain >= 0) & (t.sign == s)
-            self._certain_to_possible[g.certain[mask]] = g.possible[row][mask]
+            # a certified node lies within the limits: one piece, its first sub-node
+            self._certain_to_possible[g.certain[mask]] = g.possible[row][:, :: g.slots][mask]
         # each possible component holding certified parts is one region (distinct
         # possible components hold distinct regions); its largest certified part
         # represents it, the others may or may not belong to it

@@ -27,10 +27,14 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from .limits import JointLimit
 from .sheets import SheetTable
 from .status import IN, OUT
 
 __all__ = ["RegionGraph", "region_graph"]
+
+#: slack when comparing rounded angle pieces (more overlap only adds edges)
+_TOL = 1e-9
 
 
 @dataclass(frozen=True)
@@ -41,9 +45,12 @@ class RegionGraph:
     ----------
     certain : (n, P) int64
         Certain component of each node, -1 where the node is not certified.
-    possible : (2, n, P) int64
-        Possible component of each node for det A > 0 (row 0) and < 0 (row 1),
-        -1 where the node cannot hold a valid configuration of that sign.
+    possible : (2, n, P * slots) int64
+        Possible component of each sub-node (column ``posture * slots + piece``)
+        for det A > 0 (row 0) and < 0 (row 1), -1 where the sub-node cannot hold
+        a valid configuration of that sign. A node's sub-nodes hold its
+        configurations by the piece of each limited joint's range they lie in
+        (one piece, slot 0, for a node within the limits).
     certain_sign : (n_certain,) int8
         Sign of det A in each certain component.
     n_possible : tuple of int
@@ -58,6 +65,8 @@ class RegionGraph:
     n_possible: tuple[int, int]
     #: (m, 2) node pairs of the certain graph (node = leaf * P + posture)
     certain_edges: NDArray[np.int64]
+    #: sub-nodes per node in ``possible`` (one per piece of the joint ranges)
+    slots: int
 
 
 def _components(
@@ -93,11 +102,40 @@ def _posture_pairs(postures: NDArray[np.int64]) -> list[tuple[int, int, NDArray[
     return out
 
 
+def _pieces(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], limit: JointLimit
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+    """Values in ``[limit.lo, limit.hi]`` of unwrapped angle enclosures, as two pieces.
+
+    Returns ``(lo, hi, ok)`` of shape (2, ...): piece 0 starts where the
+    enclosure enters the range, piece 1 is its next turn from ``limit.lo``.
+    """
+    if limit.periodic:
+        full = np.ones((2, *lo.shape), dtype=bool)
+        full[1] = False
+        return np.full((2, *lo.shape), -np.inf), np.full((2, *lo.shape), np.inf), full
+    two_pi = 2 * np.pi
+    with np.errstate(invalid="ignore", over="ignore"):
+        k = np.floor((lo - limit.lo) / two_pi)
+        k = np.where(np.isfinite(k), k, 0.0)
+        a_lo = lo - two_pi * k
+        a_hi = hi - two_pi * k
+        wide = ~np.isfinite(lo) | ~np.isfinite(hi) | (hi - lo >= two_pi - _TOL)
+        ok0 = wide | (a_lo <= limit.hi + _TOL)
+        ok1 = ~wide & (a_hi - two_pi >= limit.lo - _TOL)
+        lo0 = np.where(wide, limit.lo, np.maximum(a_lo, limit.lo))
+        hi0 = np.where(wide, limit.hi, np.minimum(a_hi, limit.hi))
+        lo1 = np.full(lo.shape, limit.lo)
+        hi1 = np.where(ok1, a_hi - two_pi, limit.lo)
+    return np.stack([lo0, lo1]), np.stack([hi0, hi1]), np.stack([ok0, ok1])
+
+
 def region_graph(
     table: SheetTable,
     pairs: NDArray[np.intp],
     postures: NDArray[np.int64],
     cross_serial: bool = True,
+    limits: tuple[JointLimit, ...] | None = None,
 ) -> RegionGraph:
     """Build both graphs from a sheet table and the touching leaf pairs.
 
@@ -106,6 +144,8 @@ def region_graph(
     aspects (det A and det B of constant sign).
     """
     n, n_post = table.status.shape
+    if limits is None:
+        limits = tuple(JointLimit.unlimited() for _ in range(table.angles_lo.shape[2]))
     node = np.arange(n * n_post, dtype=np.int64).reshape(n, n_post)
     a, b = pairs[:, 0], pairs[:, 1]
     group = table.group if cross_serial else np.zeros_like(table.group)
@@ -137,26 +177,68 @@ def region_graph(
     certain_sign[certain[labelled]] = table.sign.ravel()[labelled]
 
     # --------------------------------------------------------------- possible
-    possible = np.full((2, n * n_post), -1, dtype=np.int64)
+    # A limited joint's enclosure may hold values on both sides of a stop (near hi
+    # and, one turn on, near lo): a path never passes from one to the other. Each
+    # node is split by the piece of [lo, hi] each leg's value lies in, and pieces
+    # are joined only where they overlap.
+    n_legs = table.angles_lo.shape[2]
+    slots = 1 << n_legs
+    pieces = [
+        _pieces(table.angles_lo[:, :, i], table.angles_hi[:, :, i], limits[i])
+        for i in range(n_legs)
+    ]  # per leg: (lo, hi, ok) arrays of shape (2, n, P)
+    combos = [[(c >> i) & 1 for i in range(n_legs)] for c in range(slots)]
+
+    # has[p][c]: the node of posture p has sub-node c (a piece for every leg)
+    has = np.ones((n_post, slots, n), dtype=bool)
+    for p in range(n_post):
+        for c in range(slots):
+            for i, k in enumerate(combos[c]):
+                has[p, c] &= pieces[i][2][k][:, p]
+
+    def joined(
+        ra: NDArray[np.intp], pa: int, ca: int, rb: NDArray[np.intp], pb: int, cb: int
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """The pairs (ra, rb) whose sub-nodes exist and whose pieces overlap."""
+        keep = has[pa, ca][ra] & has[pb, cb][rb]
+        ra, rb = ra[keep], rb[keep]
+        ok = np.ones(ra.size, dtype=bool)
+        for i in range(n_legs):
+            lo_i, hi_i, _ = pieces[i]
+            ka, kb = combos[ca][i], combos[cb][i]
+            ok &= (lo_i[ka][ra, pa] <= hi_i[kb][rb, pb] + _TOL) & (
+                lo_i[kb][rb, pb] <= hi_i[ka][ra, pa] + _TOL
+            )
+        return ra[ok], rb[ok]
+
+    sub = np.arange(n * n_post * slots, dtype=np.int64).reshape(n, n_post, slots)
+    possible = np.full((2, n * n_post * slots), -1, dtype=np.int64)
     counts = []
     for row, s in enumerate((1, -1)):
         alive = (table.status != OUT) & ((table.sign == s) | (table.sign == 0))
         edges = []
         for p in range(n_post):
-            ok = alive[a, p] & alive[b, p]
-            edges.append(np.stack([node[a[ok], p], node[b[ok], p]], axis=1))
-        may_fold = folding  # legs not certified regular nor unreachable
+            live = alive[a, p] & alive[b, p]
+            ia, ib = a[live], b[live]
+            for ca in range(slots):
+                for cb in range(slots):
+                    ja, jb = joined(ia, p, ca, ib, p, cb)
+                    edges.append(np.stack([sub[ja, p, ca], sub[jb, p, cb]], axis=1))
         for p, q, differ in _posture_pairs(postures):
-            same_leaf = (~differ[None, :] | may_fold).all(axis=1)
-            ok = alive[:, p] & alive[:, q] & same_leaf
-            idx = np.flatnonzero(ok)
-            edges.append(np.stack([node[idx, p], node[idx, q]], axis=1))
-        labels, count = _components(n * n_post, np.concatenate(edges), alive.ravel())
+            same_leaf = (~differ[None, :] | folding).all(axis=1)
+            rows = np.flatnonzero(alive[:, p] & alive[:, q] & same_leaf)
+            for cp in range(slots):
+                for cq in range(slots):
+                    jp, jq = joined(rows, p, cp, rows, q, cq)
+                    edges.append(np.stack([sub[jp, p, cp], sub[jq, q, cq]], axis=1))
+        taken = alive[:, :, None] & has.transpose(2, 0, 1)
+        labels, count = _components(n * n_post * slots, np.concatenate(edges), taken.ravel())
         possible[row] = labels
         counts.append(count)
     return RegionGraph(
         certain=certain.reshape(n, n_post),
-        possible=possible.reshape(2, n, n_post),
+        possible=possible.reshape(2, n, n_post * slots),
+        slots=slots,
         certain_sign=certain_sign,
         certain_edges=certain_edges,
         n_possible=(counts[0], counts[1]),

@@ -54,6 +54,9 @@ class SheetTable:
         Those configurations are within the joint limits.
     group : (n, P) bool
         The posture belongs to a certified fold group of its box.
+    angles_lo, angles_hi : (n, P, n_legs) float
+        Enclosure (unwrapped) of each leg's joint angle over the sheet: its
+        branch where the leg is regular, both branches where it may fold.
     """
 
     leg_status: NDArray[np.uint8]
@@ -62,6 +65,8 @@ class SheetTable:
     exists: NDArray[np.bool_]
     within: NDArray[np.bool_]
     group: NDArray[np.bool_]
+    angles_lo: NDArray[np.float64]
+    angles_hi: NDArray[np.float64]
 
     @property
     def folding(self) -> NDArray[np.bool_]:
@@ -86,6 +91,8 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
     exists = np.zeros((n, n_post), dtype=bool)
     within = np.zeros((n, n_post), dtype=bool)
     group = np.zeros((n, n_post), dtype=bool)
+    angles_lo = np.zeros((n, n_post, len(legs)))
+    angles_hi = np.zeros((n, n_post, len(legs)))
 
     # limits of each leg branch, and of each leg's hull where it folds
     branch_limits = [
@@ -124,6 +131,8 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
                 np.where(regular, r.branches[b].hi, r.hull.hi),
             )
             angles.append(a)
+            angles_lo[:, p, i] = a.lo
+            angles_hi[:, p, i] = a.hi
             code = np.where(regular, branch_limits[i][b], hull_limits[i])
             lim_in &= code == INSIDE
             lim_out |= code == OUTSIDE
@@ -147,4 +156,6 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         exists=exists,
         within=within,
         group=group,
+        angles_lo=angles_lo,
+        angles_hi=angles_hi,
     )
