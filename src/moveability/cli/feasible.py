@@ -58,13 +58,6 @@ def feasible_command(
     """
     options.check_output(json_out, overwrite)
     with options.reporting_errors():
-        mechanism = options.load_mechanism(spec)
-        poses = options.read_points(points, mechanism.pose_names)
-        result = options.run_analysis(
-            mechanism,
-            precision,
-            options.progress_reporter(),
-            **options.analysis_options(generalized_aspects),
-        )
+        result, poses = options.analyse_poses(spec, points, precision, generalized_aspects)
         data = result.feasible(poses)
     options.write_output(data, json_out, overwrite, format_feasible)

@@ -250,6 +250,21 @@ def aspects_option(command: F) -> F:
     )(command)
 
 
+def analyse_poses(
+    spec_path: str, points: str, precision: float, generalized_aspects: bool = False
+) -> tuple[Any, NDArray[np.float64]]:
+    """The analysis of the mechanism of a spec file and the poses of a CSV file.
+
+    Call inside :func:`reporting_errors`.
+    """
+    mechanism = load_mechanism(spec_path)
+    poses = read_points(points, mechanism.pose_names)
+    result = run_analysis(
+        mechanism, precision, progress_reporter(), **analysis_options(generalized_aspects)
+    )
+    return result, poses
+
+
 def analysis_options(generalized_aspects: bool) -> dict[str, Any]:
     """Keyword arguments of the analysis for the command-line flags that are set."""
     return {"generalized_aspects": True} if generalized_aspects else {}

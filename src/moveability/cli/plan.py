@@ -65,9 +65,7 @@ def plan_command(
 
     options.check_output(json_out, overwrite)
     with options.reporting_errors():
-        mechanism = options.load_mechanism(spec)
-        poses = options.read_points(points, mechanism.pose_names)
-        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        result, poses = options.analyse_poses(spec, points, precision)
         try:
             data = result.plan(poses)
         except PlanningError as error:
