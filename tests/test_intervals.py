@@ -36,6 +36,7 @@ from moveability.intervals import (
     sqrt,
     square,
 )
+from references import pi_fraction
 
 FMAX = float(np.finfo(np.float64).max)
 TINY = 5e-324
@@ -49,19 +50,7 @@ def quiet_overflow() -> np.errstate:
 
 # ---------------------------------------------------------------- exact pi
 def _pi_fraction(digits: int = 400) -> Fraction:
-    """pi to ``digits`` decimals (Machin's formula in integers)."""
-    one = 10 ** (digits + 10)
-
-    def arctan_inv(x: int) -> int:
-        total = term = one // x
-        x2, k, sign = x * x, 1, -1
-        while term:
-            term //= x2
-            total += sign * (term // (2 * k + 1))
-            sign, k = -sign, k + 1
-        return total
-
-    return Fraction(4 * (4 * arctan_inv(5) - arctan_inv(239)), one)
+    return pi_fraction(digits)
 
 
 PI = _pi_fraction()

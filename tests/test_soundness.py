@@ -36,6 +36,7 @@ from moveability.mechanisms import FiveBar
 from moveability.mechanisms.base import FOLD_INNER, FOLD_OUTER, REGULAR
 from moveability.sheets import classify_sheets
 from moveability.status import IN, OUT
+from references import pi_fraction
 
 PI = np.pi
 UNLIMITED = JointLimit.unlimited()
@@ -62,19 +63,7 @@ def _possible_label(result, row, leaf, posture, point):
 
 
 def _pi_fraction(digits: int = 80) -> Fraction:
-    """pi to ``digits`` decimals (Machin's formula in integers)."""
-    one = 10 ** (digits + 10)
-
-    def arctan_inv(x: int) -> int:
-        total = term = one // x
-        x2, k, sign = x * x, 1, -1
-        while term:
-            term //= x2
-            total += sign * (term // (2 * k + 1))
-            sign, k = -sign, k + 1
-        return total
-
-    return Fraction(4 * (4 * arctan_inv(5) - arctan_inv(239)), one)
+    return pi_fraction(digits)
 
 
 EXACT_TWO_PI = 2 * _pi_fraction()
