@@ -46,19 +46,20 @@ N_GRID = 500
 def _possible_label(result, row, leaf, posture, point):
     """Possible component of the sub-node holding the configuration of ``posture`` at
     ``point``: the piece of each limited joint's range its value lies in."""
-    from moveability.regions import _pieces
+    from moveability.regions import _pieces, split_legs
 
     g, t, m = result.graph, result.table, result.mechanism
     q = m.joint_angles(point[None, :], clip=True)[0, posture]
     slot = 0
-    for i, lim in enumerate(m.limits):
+    for bit, i in enumerate(split_legs(m.limits)):
+        lim = m.limits[i]
         lo, hi, ok = _pieces(
             t.angles_lo[leaf : leaf + 1, posture, i], t.angles_hi[leaf : leaf + 1, posture, i], lim
         )
         v = lim.wrap(q[i]) if not lim.periodic else q[i]
         inside = [bool(ok[j, 0] and lo[j, 0] - 1e-9 <= v <= hi[j, 0] + 1e-9) for j in (0, 1)]
         if not inside[0] and inside[1]:
-            slot |= 1 << i
+            slot |= 1 << bit
     return int(g.possible[row][leaf, posture * g.slots + slot])
 
 

@@ -23,11 +23,13 @@ _TWO_PI_HI = float(np.nextafter(_TWO_PI, np.inf))
 
 @dataclass(frozen=True)
 class JointLimit:
-    """Range ``[lo, hi]`` of a revolute joint angle (radians), or unlimited.
+    """Range ``[lo, hi]`` of a revolute joint angle (radians), or unlimited; or the
+    stroke of a prismatic joint (``prismatic=True``, pose units).
 
     A limited joint cannot wrap around: with ``[-pi, pi]`` the angle ``pi`` is a
     stop, not the same position as ``-pi`` reached from the other side.
-    Ranges wider than one turn are refused.
+    Revolute ranges wider than one turn are refused. A prismatic stroke is a
+    plain interval: its values never wrap.
 
     Examples
     --------
@@ -38,20 +40,26 @@ class JointLimit:
     [1, 4, 2]
     >>> JointLimit.unlimited().classify(Interval([5.0], [9.0])).tolist()
     [1]
+    >>> stroke = JointLimit(10.0, 25.0, prismatic=True)
+    >>> stroke.classify(Interval([9.0, 12.0], [11.0, 13.0])).tolist()
+    [4, 1]
     """
 
     lo: float
     hi: float
     periodic: bool = False
+    prismatic: bool = False
 
     def __post_init__(self) -> None:
         if self.periodic:
+            if self.prismatic:
+                raise InvalidParameterError("limits", "a finite stroke [lo, hi]", "unlimited")
             return
         if not (np.isfinite(self.lo) and np.isfinite(self.hi)):
             raise InvalidParameterError("limits", "finite bounds", (self.lo, self.hi))
         if not self.lo < self.hi:
             raise InvalidParameterError("limits", "lo < hi", (self.lo, self.hi))
-        if self.hi - self.lo > _TWO_PI_HI:
+        if not self.prismatic and self.hi - self.lo > _TWO_PI_HI:
             raise InvalidParameterError(
                 "limits", "a range of at most 2 pi (use 'unlimited')", (self.lo, self.hi)
             )
@@ -69,17 +77,28 @@ class JointLimit:
         """
         if self.periodic:
             return np.full(angles.lo.shape, INSIDE, dtype=np.uint8)
+        if self.prismatic:
+            out = np.full(angles.lo.shape, STRADDLES, dtype=np.uint8)
+            out[(angles.lo >= self.lo) & (angles.hi <= self.hi)] = INSIDE
+            out[(angles.hi < self.lo) | (angles.lo > self.hi)] = OUTSIDE
+            return out
         return classify_angles(angles, self.lo, self.hi)
 
     def wrap(self, angles: ArrayLike) -> NDArray[np.float64]:
-        """Representatives of angles in ``[lo, lo + 2 pi)`` (in ``[-pi, pi)`` if unlimited)."""
+        """Representatives of angles in ``[lo, lo + 2 pi)`` (in ``[-pi, pi)`` if unlimited);
+        prismatic values as they are."""
         a = np.asarray(angles, dtype=np.float64)
+        if self.prismatic:
+            return a
         return self.lo + np.mod(a - self.lo, _TWO_PI)
 
     def contains(self, angles: ArrayLike) -> NDArray[np.bool_]:
         """Whether point angles (any turn) fall in the range."""
         if self.periodic:
             return np.isfinite(np.asarray(angles, dtype=np.float64))
+        if self.prismatic:
+            a = np.asarray(angles, dtype=np.float64)
+            return (a >= self.lo) & (a <= self.hi)
         return self.wrap(angles) <= self.hi
 
 

@@ -31,7 +31,7 @@ from .limits import JointLimit
 from .sheets import SheetTable
 from .status import IN, OUT
 
-__all__ = ["RegionGraph", "region_graph"]
+__all__ = ["RegionGraph", "region_graph", "split_legs"]
 
 #: slack when comparing rounded angle pieces (more overlap only adds edges)
 _TOL = 1e-9
@@ -114,6 +114,15 @@ def _pieces(
         full = np.ones((2, *lo.shape), dtype=bool)
         full[1] = False
         return np.full((2, *lo.shape), -np.inf), np.full((2, *lo.shape), np.inf), full
+    if limit.prismatic:
+        # a stroke never wraps: one piece
+        one = np.zeros((2, *lo.shape), dtype=bool)
+        one[0] = (lo <= limit.hi + _TOL) & (hi >= limit.lo - _TOL)
+        return (
+            np.stack([np.maximum(lo, limit.lo), np.full(lo.shape, limit.lo)]),
+            np.stack([np.minimum(hi, limit.hi), np.full(lo.shape, limit.lo)]),
+            one,
+        )
     two_pi = 2 * np.pi
     with np.errstate(invalid="ignore", over="ignore"):
         k = np.floor((lo - limit.lo) / two_pi)
@@ -128,6 +137,15 @@ def _pieces(
         lo1 = np.full(lo.shape, limit.lo)
         hi1 = np.where(ok1, a_hi - two_pi, limit.lo)
     return np.stack([lo0, lo1]), np.stack([hi0, hi1]), np.stack([ok0, ok1])
+
+
+def split_legs(limits: tuple[JointLimit, ...]) -> list[int]:
+    """Legs whose joint range has two pieces: the limited revolute joints.
+
+    Bit ``j`` of a sub-node's slot is the piece of leg ``split_legs(limits)[j]``;
+    prismatic and free joints have one piece.
+    """
+    return [i for i, lim in enumerate(limits) if not (lim.periodic or lim.prismatic)]
 
 
 def region_graph(
@@ -182,12 +200,16 @@ def region_graph(
     # node is split by the piece of [lo, hi] each leg's value lies in, and pieces
     # are joined only where they overlap.
     n_legs = table.angles_lo.shape[2]
-    slots = 1 << n_legs
+    split = split_legs(limits)
+    slots = 1 << len(split)
     pieces = [
         _pieces(table.angles_lo[:, :, i], table.angles_hi[:, :, i], limits[i])
         for i in range(n_legs)
     ]  # per leg: (lo, hi, ok) arrays of shape (2, n, P)
-    combos = [[(c >> i) & 1 for i in range(n_legs)] for c in range(slots)]
+    combos = [
+        [(c >> split.index(i)) & 1 if i in split else 0 for i in range(n_legs)]
+        for c in range(slots)
+    ]
 
     # has[p][c]: the node of posture p has sub-node c (a piece for every leg)
     has = np.ones((n_post, slots, n), dtype=bool)
