@@ -151,6 +151,7 @@ def analyze(
             hi,
             classify,
             max_depth=depths,
+            periodic=mechanism.periodic_axes,
             max_leaves=max_leaves,
             progress=watch,
             merge=False,
@@ -322,7 +323,7 @@ class Analysis:
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             raise InvalidParameterError(f"points[{i}]", "finite coordinates", p[i].tolist())
-        return p
+        return self.mechanism.wrap_poses(p)
 
     def _point_table(self, p: NDArray[np.float64]) -> SheetTable:
         """Sheet certificates at the points themselves (degenerate boxes)."""
@@ -538,6 +539,7 @@ def load_analysis(path: str | os.PathLike[str]) -> Analysis:
         fields["keys"],
         fields["levels"],
         fields["status"],
+        mechanism.periodic_axes,
     )
     aspects = bool(fields["generalized_aspects"]) if "generalized_aspects" in fields else False
     return Analysis(mechanism, float(fields["precision"]), tree, generalized_aspects=aspects)

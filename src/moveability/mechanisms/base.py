@@ -136,6 +136,19 @@ class Mechanism:
     limits: tuple[JointLimit, ...]
     #: box of poses holding the workspace: (lo, hi)
     bounds: tuple[Array, Array]
+    #: pose axes that wrap around (an orientation angle over one full turn of the box)
+    periodic_axes: tuple[int, ...] = ()
+
+    def wrap_poses(self, points: Array) -> Array:
+        """Poses with their periodic coordinates brought into the bounds' turn."""
+        if not self.periodic_axes:
+            return points
+        out = np.array(points, dtype=np.float64, copy=True)
+        lo, hi = self.bounds
+        for axis in self.periodic_axes:
+            span = hi[axis] - lo[axis]
+            out[:, axis] = lo[axis] + np.mod(out[:, axis] - lo[axis], span)
+        return out
 
     @property
     def joint_names(self) -> tuple[str, ...]:
