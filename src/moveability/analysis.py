@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -65,23 +65,36 @@ class Region:
     possible: int
 
 
-def _check_precision(precision: float) -> float:
+def _check_precision(precision: float | Sequence[float], k: int) -> NDArray[np.float64]:
+    """Per-axis precision from one number or one per pose axis."""
+    allowed = f"a positive length, or {k} of them (one per pose axis)"
     try:
-        value = float(precision)
+        value = np.asarray(precision, dtype=np.float64)
     except (TypeError, ValueError):
-        raise InvalidParameterError("precision", "a positive length", precision) from None
-    if not (np.isfinite(value) and value > 0):
-        raise InvalidParameterError("precision", "a positive length", precision)
+        raise InvalidParameterError("precision", allowed, precision) from None
+    if value.ndim == 0:
+        value = np.full(k, float(value))
+    if value.shape != (k,) or not (np.isfinite(value).all() and (value > 0).all()):
+        raise InvalidParameterError("precision", allowed, precision)
     return value
 
 
-def _depths(lo: NDArray[np.float64], hi: NDArray[np.float64], precision: float) -> tuple[int, ...]:
+def _as_given(eps: NDArray[np.float64]) -> float | tuple[float, ...]:
+    """One number when every axis has the same precision, else a tuple."""
+    return float(eps[0]) if (eps == eps[0]).all() else tuple(float(v) for v in eps)
+
+
+def _depths(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], precision: NDArray[np.float64]
+) -> tuple[int, ...]:
     widths = np.asarray(hi) - np.asarray(lo)
-    depths = tuple(int(max(0, np.ceil(np.log2(w / precision)))) for w in widths)
+    depths = tuple(
+        int(max(0, np.ceil(np.log2(w / e)))) for w, e in zip(widths, precision, strict=True)
+    )
     if sum(depths) > MAX_KEY_BITS:
         raise ResolutionError(
             "precision",
-            f"a precision coarser than about {(hi - lo).max() / 2.0**30:.3g}",
+            f"a precision coarser than about {(hi - lo).max() / 2.0**(62 / len(lo)):.3g}",
             precision,
         )
     return depths
@@ -89,7 +102,7 @@ def _depths(lo: NDArray[np.float64], hi: NDArray[np.float64], precision: float) 
 
 def analyze(
     mechanism: Mechanism | Mapping[str, Any] | str | os.PathLike[str],
-    precision: float = 0.1,
+    precision: float | Sequence[float] = 0.1,
     *,
     max_leaves: int = 1 << 23,
     progress: Progress | None = None,
@@ -101,8 +114,9 @@ def analyze(
     ----------
     mechanism : Mechanism, mapping or path
         A mechanism, or a spec (see :func:`moveability.spec.load_spec`).
-    precision : float
-        Undecided leaves are refined until at most this wide (pose units).
+    precision : float or sequence of float
+        Undecided leaves are refined until at most this wide (pose units: lengths
+        and radians); one number, or one per pose axis.
     max_leaves : int
         Fail with :class:`~moveability.ResolutionError` rather than hold more leaves.
     progress : callable, optional
@@ -124,7 +138,7 @@ def analyze(
         from .spec import load_spec
 
         mechanism = from_spec(load_spec(mechanism))
-    eps = _check_precision(precision)
+    eps = _check_precision(precision, len(mechanism.pose_names))
     lo, hi = mechanism.bounds
     depths = _depths(lo, hi, eps)
 
@@ -162,7 +176,7 @@ def analyze(
             f"a precision whose tree holds at most max_leaves={max_leaves} leaves",
             precision,
         ) from None
-    return Analysis(mechanism, eps, tree, generalized_aspects=generalized_aspects)
+    return Analysis(mechanism, _as_given(eps), tree, generalized_aspects=generalized_aspects)
 
 
 class Analysis:
@@ -175,13 +189,16 @@ class Analysis:
     def __init__(
         self,
         mechanism: Mechanism,
-        precision: float,
+        precision: float | Sequence[float],
         tree: HyperTree,
         generalized_aspects: bool = False,
     ) -> None:
         self.mechanism = mechanism
         self.generalized_aspects = bool(generalized_aspects)
-        self.precision = precision
+        #: per pose axis
+        self.precisions = _check_precision(precision, len(mechanism.pose_names))
+        #: as given: one number, or one per pose axis
+        self.precision = _as_given(self.precisions)
         self.tree = tree
         leaves = tree.leaves()
         self.table: SheetTable = classify_sheets(mechanism, leaves.lo, leaves.hi)
@@ -197,6 +214,11 @@ class Analysis:
             limits=mechanism.limits,
         )
         self._resolve()
+
+    @property
+    def precision_text(self) -> str:
+        """The precision for titles and summaries (``0.1`` or ``0.1, 0.1, 0.02``)."""
+        return ", ".join(f"{v:g}" for v in np.atleast_1d(self.precision))
 
     # ------------------------------------------------------------ regions
     def _resolve(self) -> None:
@@ -261,10 +283,15 @@ class Analysis:
         del n_post
 
     @property
+    def measure_name(self) -> str:
+        """What the measures of sets of poses are: ``area`` (2 pose axes), ``volume`` (3)."""
+        return {1: "length", 2: "area", 3: "volume"}.get(self.tree.ndim, "measure")
+
+    @property
     def workspace(self) -> dict[str, tuple[float, float]]:
-        """Bounds on the area (volume) of the workspace W."""
+        """Bounds on the area (volume) of the workspace W, keyed by :attr:`measure_name`."""
         return {
-            "area": (
+            self.measure_name: (
                 float(self.areas[self._w_certain].sum()),
                 float(self.areas[self._w_possible].sum()),
             )
@@ -278,18 +305,20 @@ class Analysis:
         may or may not hide there), with the ``area`` of the leaves they touch;
         ``detached``: certified parts whose region is not known (they lie in a
         listed region's possible part but may belong to another region hiding
-        there); ``boundary_area``: area of the leaves left undecided.
+        there); ``boundary_area``: area of the leaves left undecided. With three
+        pose axes the keys say ``volume`` for ``area``.
         """
         g = self.graph
         touch = np.zeros(self.areas.size, dtype=bool)
         for row, u in self._unresolved:
             touch |= (g.possible[row] == u).any(axis=1)
         undecided_leaves = self.tree.status == BOUNDARY
+        measure = self.measure_name
         return {
             "components": len(self._unresolved),
-            "area": float(self.areas[touch].sum()),
+            measure: float(self.areas[touch].sum()),
             "detached": len(self._extra_certain),
-            "boundary_area": float(self.areas[undecided_leaves].sum()),
+            f"boundary_{measure}": float(self.areas[undecided_leaves].sum()),
         }
 
     @property
@@ -458,13 +487,15 @@ class Analysis:
     # -------------------------------------------------------------- output
     def to_dict(self) -> dict[str, Any]:
         """The summary as a JSON-ready dict (the ``regions --json`` document)."""
+        measure = self.measure_name
         return {
             "precision": self.precision,
-            "workspace": {"area": list(self.workspace["area"])},
+            "pose": list(self.mechanism.pose_names),
+            "workspace": {measure: list(self.workspace[measure])},
             "regions": [
                 {
                     "id": r.id,
-                    "area": list(r.area),
+                    measure: list(r.area),
                     "equals_workspace": r.equals_workspace,
                     "sign": r.sign,
                     "postures": list(r.postures),
@@ -480,17 +511,18 @@ class Analysis:
 
     def summary(self) -> str:
         """A readable summary."""
-        w = self.workspace["area"]
+        measure = self.measure_name
+        w = self.workspace[measure]
         lines = [
             f"{self.mechanism!r}",
-            f"precision {self.precision:g}: {len(self.tree)} leaves",
-            f"workspace area in [{w[0]:.4f}, {w[1]:.4f}]",
+            f"precision {self.precision_text}: {len(self.tree)} leaves",
+            f"workspace {measure} in [{w[0]:.4f}, {w[1]:.4f}]",
             f"{len(self.regions)} region(s):",
         ]
         for r in self.regions:
             eq = {True: "yes", False: "no", None: "unknown"}[r.equals_workspace]
             lines.append(
-                f"  region {r.id}: det A {'>' if r.sign > 0 else '<'} 0, area in "
+                f"  region {r.id}: det A {'>' if r.sign > 0 else '<'} 0, {measure} in "
                 f"[{r.area[0]:.4f}, {r.area[1]:.4f}], postures {', '.join(r.postures)}, "
                 f"equals W: {eq}"
             )
@@ -498,7 +530,7 @@ class Analysis:
         lines.append(
             f"undecided: {u['components']} component(s) without certified part, "
             f"{u['detached']} detached certified part(s), "
-            f"{u['boundary_area']:.4f} of area in undecided leaves"
+            f"{u[f'boundary_{measure}']:.4f} of {measure} in undecided leaves"
         )
         nc = {True: "yes", False: "no", None: "unknown"}[self.n_connected]
         lines.append(f"W N-connected: {nc}")
@@ -515,7 +547,7 @@ class Analysis:
             path,
             format=np.array(_FORMAT),
             spec=np.array(json.dumps(self.mechanism.to_spec())),
-            precision=np.array(self.precision),
+            precision=self.precisions,
             generalized_aspects=np.array(self.generalized_aspects),
             lo=self.tree.lo,
             hi=self.tree.hi,
@@ -542,4 +574,5 @@ def load_analysis(path: str | os.PathLike[str]) -> Analysis:
         mechanism.periodic_axes,
     )
     aspects = bool(fields["generalized_aspects"]) if "generalized_aspects" in fields else False
-    return Analysis(mechanism, float(fields["precision"]), tree, generalized_aspects=aspects)
+    precision = np.atleast_1d(np.asarray(fields["precision"], dtype=np.float64))
+    return Analysis(mechanism, _as_given(precision), tree, generalized_aspects=aspects)

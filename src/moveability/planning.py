@@ -158,7 +158,7 @@ def plan_motion(analysis: Analysis, points: Array, step: float | None = None) ->
     if not answer["feasible"]:
         raise PlanningError(_apart_message(analysis, points, answer["feasible"]))
     region = analysis.regions[answer["region"]]
-    step = analysis.precision if step is None else float(step)
+    step = float(analysis.precisions.min()) if step is None else float(step)
     p = np.asarray(points, dtype=np.float64).reshape(-1, len(analysis.mechanism.pose_names))
     _, leaf = analysis._locate_leaves(p)
     component = region.certain

@@ -169,7 +169,7 @@ def plot_workspace(result: Analysis, ax: Axes | None = None) -> Figure:
         *handles,
     ]
     ax.legend(handles=handles, loc="upper right", fontsize=7)
-    _frame(ax, m, f"Workspace W and singularity loci (precision {result.precision:g})")
+    _frame(ax, m, f"Workspace W and singularity loci (precision {result.precision_text})")
     return fig
 
 
@@ -290,7 +290,7 @@ def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure
     _frame(overlay, result.mechanism, "All N-connected regions")
     for ax in axes[n:]:
         ax.set_axis_off()
-    fig.suptitle(f"N-connected regions (precision {result.precision:g})")
+    fig.suptitle(f"N-connected regions (precision {result.precision_text})")
     return fig
 
 

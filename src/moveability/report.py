@@ -57,13 +57,14 @@ def write_report(result: Analysis, out_dir: str | os.PathLike[str]) -> str:
             images.append((name, _png(figure(name, result))))
         except MoveabilityError as error:  # e.g. no certified motion to draw
             images.append((name, f"unavailable: {error}"))
+    measure = result.measure_name
     rows = "\n".join(
         f"<tr><td>{r['id']}</td><td>{'&gt;' if r['sign'] > 0 else '&lt;'} 0</td>"
-        f"<td>[{r['area'][0]:.4f}, {r['area'][1]:.4f}]</td>"
+        f"<td>[{r[measure][0]:.4f}, {r[measure][1]:.4f}]</td>"
         f"<td>{_tri(r['equals_workspace'])}</td><td>{', '.join(r['postures'])}</td></tr>"
         for r in data["regions"]
     )
-    w = data["workspace"]["area"]
+    w = data["workspace"][measure]
     und = data["undecided"]
     figures = []
     for name, payload in images:
@@ -88,16 +89,17 @@ img {{ max-width: 100%; }} figure {{ margin: 2em 0; }} pre {{ background: #f4f4f
 <h1>Regions of feasible point-to-point motions</h1>
 <h2>Mechanism</h2>
 <pre>{html.escape(spec)}</pre>
-<p>Precision: {data["precision"]:g} (undecided cells are at most this wide);
+<p>Precision: {result.precision_text} (undecided cells are at most this wide);
 {data["leaves"]} cells.</p>
 <h2>Summary</h2>
-<p>Workspace area in [{w[0]:.4f}, {w[1]:.4f}].
+<p>Workspace {measure} in [{w[0]:.4f}, {w[1]:.4f}].
 W is N-connected: <strong>{_tri(data["n_connected"])}</strong>.</p>
-<table><tr><th>region</th><th>det A</th><th>area of W_Nj [inner, outer]</th>
+<table><tr><th>region</th><th>det A</th><th>{measure} of W_Nj [inner, outer]</th>
 <th>equals W</th><th>postures</th></tr>
 {rows}
 </table>
-<p>Undecided at this precision: {und["boundary_area"]:.4f} of area in undecided cells;
+<p>Undecided at this precision: {und[f"boundary_{measure}"]:.4f} of {measure} in undecided
+cells;
 {und["components"]} possible region(s) without a certified part;
 {und["detached"]} certified part(s) of unknown region.</p>
 <h2>Figures</h2>

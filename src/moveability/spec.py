@@ -29,6 +29,7 @@ Mechanisms are known through :data:`MECHANISMS`; adding one is adding an entry.
 
 from __future__ import annotations
 
+import importlib
 import math
 import numbers
 import os
@@ -72,18 +73,31 @@ class MechanismSchema(NamedTuple):
     Parameters
     ----------
     parameters : tuple of str
-        Names of the parameters, all positive lengths.
+        Names of the parameters.
     joints : tuple of str
         Names of the actuated joints; each needs an entry in ``[limits]``.
     defaults : mapping of str to float, optional
         Values of the parameters that may be left out; ``None`` when all are
         required.
+    kinds : mapping of str to str, optional
+        Kind of each parameter: ``"length"`` (a positive number, the default),
+        ``"lengths"`` (one positive number per joint) or ``"points"`` (one
+        ``[x, y]`` pair per joint).
+    joint_kind : str, optional
+        ``"angle"`` (revolute joints, radians, the default; ``"unlimited"``
+        allowed), ``"distance"`` (prismatic joints measuring a length: a stroke
+        ``[lo, hi]`` with ``0 <= lo < hi``) or ``"position"`` (prismatic joints
+        along a line: any ``lo < hi``).
     """
 
     parameters: tuple[str, ...]
     joints: tuple[str, ...]
-    defaults: Mapping[str, float] | None = None
+    defaults: Mapping[str, Any] | None = None
+    kinds: Mapping[str, str] | None = None
+    joint_kind: str = "angle"
 
+
+_THREE = ("1", "2", "3")
 
 #: known mechanisms: name -> schema
 MECHANISMS: dict[str, MechanismSchema] = {
@@ -92,7 +106,22 @@ MECHANISMS: dict[str, MechanismSchema] = {
         joints=("theta1", "theta2"),
         defaults=None,
     ),
+    "3-RPR": MechanismSchema(
+        parameters=("base", "platform"),
+        joints=tuple(f"rho{i}" for i in _THREE),
+        kinds={"base": "points", "platform": "points"},
+        joint_kind="distance",
+    ),
+    "biglide": MechanismSchema(
+        parameters=("L1", "L2"),
+        joints=("rho1", "rho2"),
+        joint_kind="position",
+    ),
 }
+
+#: mechanisms whose specification has a format of its own: name -> normaliser
+#: (resolved lazily: the normalisers live with the mechanisms)
+_OWN_FORMAT: dict[str, str] = {}
 
 
 class _Plain(str):
@@ -260,13 +289,16 @@ def load_spec(source: str | os.PathLike[str] | Mapping[str, Any]) -> dict[str, A
     else:
         raise SpecError("spec", "a path to a TOML file or a mapping", source)
 
+    name = _mechanism(data.get("mechanism", _NOTHING))
+    if name in _OWN_FORMAT:
+        module, _, function = _OWN_FORMAT[name].rpartition(".")
+        normalise = getattr(importlib.import_module(module), function)
+        return dict(normalise(data))
     for key in data:
         if key not in _TOP_KEYS:
             raise SpecError(
                 str(key), "one of the keys " + ", ".join(map(repr, _TOP_KEYS)), _Plain(str(key))
             )
-
-    name = _mechanism(data.get("mechanism", _NOTHING))
     schema = MECHANISMS[name]
     return {
         "mechanism": name,
@@ -293,11 +325,13 @@ def _read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
 
 
 def _mechanism(value: object) -> str:
-    known = ", ".join(map(repr, MECHANISMS))
+    names = [*MECHANISMS, *_OWN_FORMAT]
+    known = ", ".join(map(repr, names))
     if isinstance(value, str):
+        lowered = {n.lower(): n for n in names}
         name = value.strip().lower()
-        if name in MECHANISMS:
-            return name
+        if name in lowered:
+            return lowered[name]
     raise SpecError("mechanism", f"one of {known}", value)
 
 
@@ -307,10 +341,11 @@ def _table(value: object, key: str, allowed: str) -> Mapping[str, Any]:
     return value
 
 
-def _parameters(value: object, mechanism: str, schema: MechanismSchema) -> dict[str, float]:
+def _parameters(value: object, mechanism: str, schema: MechanismSchema) -> dict[str, Any]:
     names = ", ".join(schema.parameters)
     table = _table(value, "parameters", f"a table giving {names}")
     defaults = schema.defaults or {}
+    kinds = schema.kinds or {}
     for key in table:
         if key not in schema.parameters:
             raise SpecError(
@@ -318,23 +353,55 @@ def _parameters(value: object, mechanism: str, schema: MechanismSchema) -> dict[
                 f"no such parameter ({mechanism} takes {names})",
                 table[key],
             )
-    out: dict[str, float] = {}
+    out: dict[str, Any] = {}
     for key in schema.parameters:
         if key in table:
-            length = table[key]
+            given = table[key]
         elif key in defaults:
-            length = defaults[key]
+            given = defaults[key]
         else:
-            raise SpecError(f"parameters.{key}", "a positive finite length", _NOTHING)
-        if not (_is_number(length) and math.isfinite(length) and length > 0):
-            raise SpecError(f"parameters.{key}", "a positive finite length", length)
-        out[key] = float(length)
+            given = _NOTHING
+        out[key] = _parameter(given, f"parameters.{key}", kinds.get(key, "length"), schema)
     return out
+
+
+def _positive(value: object) -> bool:
+    return _is_number(value) and math.isfinite(value) and value > 0  # type: ignore[operator, arg-type]
+
+
+def _parameter(value: object, key: str, kind: str, schema: MechanismSchema) -> Any:
+    """One parameter of the given kind, checked (see :class:`MechanismSchema`)."""
+    n = len(schema.joints)
+    if kind == "length":
+        if not _positive(value):
+            raise SpecError(key, "a positive finite length", value)
+        return float(value)  # type: ignore[arg-type]
+    if kind == "lengths":
+        allowed = f"a list of {n} positive finite lengths"
+        if not (isinstance(value, Sequence) and not isinstance(value, str) and len(value) == n):
+            raise SpecError(key, allowed, value)
+        if not all(_positive(v) for v in value):
+            raise SpecError(key, allowed, value)
+        return [float(v) for v in value]
+    if kind == "points":
+        allowed = f"a list of {n} points [x, y] with finite coordinates"
+        if not (isinstance(value, Sequence) and not isinstance(value, str) and len(value) == n):
+            raise SpecError(key, allowed, value)
+        points = []
+        for i, point in enumerate(value):
+            ok = isinstance(point, Sequence) and not isinstance(point, str) and len(point) == 2
+            if not ok or not all(_is_number(c) and math.isfinite(c) for c in point):
+                raise SpecError(f"{key}[{i}]", "a point [x, y] with finite coordinates", point)
+            points.append([float(point[0]), float(point[1])])
+        return points
+    raise ValueError(f"unknown parameter kind {kind!r}")
 
 
 def _limits(
     value: object, mechanism: str, schema: MechanismSchema
 ) -> dict[str, tuple[float, float] | str]:
+    if schema.joint_kind != "angle":
+        return _strokes(value, mechanism, schema)
     joints = ", ".join(schema.joints)
     allowed = f'[lo, hi] in radians with lo < hi, or "{UNLIMITED}"'
     table = _table(value, "limits", f"a table giving {joints}, each {allowed}")
@@ -364,5 +431,35 @@ def _limits(
             raise SpecError(
                 key, f'a range no wider than 2*pi (use "{UNLIMITED}" for a free joint)', limit
             )
+        out[joint] = (lo, hi)
+    return out
+
+
+def _strokes(
+    value: object, mechanism: str, schema: MechanismSchema
+) -> dict[str, tuple[float, float] | str]:
+    """Limits of prismatic joints: finite strokes ``[lo, hi]`` (never unlimited)."""
+    joints = ", ".join(schema.joints)
+    distance = schema.joint_kind == "distance"
+    allowed = "[lo, hi] with " + ("0 <= lo < hi" if distance else "lo < hi") + ", finite"
+    table = _table(value, "limits", f"a table giving {joints}, each {allowed}")
+    for key in table:
+        if key not in schema.joints:
+            raise SpecError(
+                f"limits.{key}", f"no such joint ({mechanism} has {joints})", table[key]
+            )
+    out: dict[str, tuple[float, float] | str] = {}
+    for joint in schema.joints:
+        key = f"limits.{joint}"
+        limit = table.get(joint, _NOTHING)
+        if not isinstance(limit, Sequence) or isinstance(limit, str) or len(limit) != 2:
+            raise SpecError(key, allowed, limit)
+        if not all(_is_number(v) and math.isfinite(v) for v in limit):
+            raise SpecError(key, allowed, limit)
+        lo, hi = float(limit[0]), float(limit[1])
+        if not lo < hi:
+            raise SpecError(key, "[lo, hi] with lo < hi (an empty or reversed range)", limit)
+        if distance and lo < 0:
+            raise SpecError(key, "a stroke of lengths, 0 <= lo", limit)
         out[joint] = (lo, hi)
     return out

@@ -150,7 +150,7 @@ def analyze_wxq(
     >>> sorted(r.sign for r in result.regions)
     [-1, 1]
     """
-    eps = _check_precision(precision)
+    eps = float(_check_precision(precision, 1)[0])
     w_lo, w_hi = mechanism.bounds
     q_lo = np.array([lim.lo for lim in mechanism.limits])
     q_hi = np.array([lim.lo + 2 * np.pi if lim.periodic else lim.hi for lim in mechanism.limits])

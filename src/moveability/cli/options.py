@@ -72,22 +72,27 @@ class _Plain(str):
 
 # ------------------------------------------------------------------ options
 class _Precision(click.ParamType):
-    """A positive finite number; a bad value is an :class:`InputError` (one line)."""
+    """A positive finite number, or one per pose axis separated by commas; a bad value
+    is an :class:`InputError` (one line)."""
 
     name = "EPS"
 
     def convert(
         self, value: Any, param: click.Parameter | None, ctx: click.Context | None
-    ) -> float:
+    ) -> float | tuple[float, ...]:
+        if isinstance(value, float | tuple):
+            return value
+        parts = str(value).split(",")
         try:
-            eps = float(value)
+            eps = [float(v) for v in parts]
         except (TypeError, ValueError):
-            eps = math.nan
-        if not (math.isfinite(eps) and eps > 0):
+            eps = [math.nan]
+        if not all(math.isfinite(e) and e > 0 for e in eps):
             raise InputError(
-                f"invalid --precision: expected a positive finite number, got {value!r}"
+                "invalid --precision: expected a positive finite number, or one per pose "
+                f"axis separated by commas, got {value!r}"
             )
-        return eps
+        return eps[0] if len(eps) == 1 else tuple(eps)
 
 
 def precision_option(command: F) -> F:
@@ -98,7 +103,10 @@ def precision_option(command: F) -> F:
         type=_Precision(),
         default=DEFAULT_PRECISION,
         show_default=True,
-        help="Size of the smallest cells of the analysis (units of the workspace and radians).",
+        help=(
+            "Size of the smallest cells of the analysis (pose units: lengths and radians); "
+            "one number, or one per pose axis separated by commas (0.1,0.1,0.02)."
+        ),
     )(command)
 
 

@@ -37,9 +37,11 @@ def format_regions(data: Mapping[str, Any]) -> str:
     1     [5.5, 7]            unknown
     workspace N-connected: unknown
     """
+    measure = "volume" if "volume" in data["workspace"] else "area"
+    eps = data["precision"]
     lines = [
-        f"precision: {data['precision']:g}",
-        f"workspace area: {_area(data['workspace']['area'])}",
+        "precision: " + (", ".join(f"{v:g}" for v in eps) if isinstance(eps, list) else f"{eps:g}"),
+        f"workspace {measure}: {_area(data['workspace'][measure])}",
         (
             f"generalized aspects: {len(data['regions'])}"
             if data.get("generalized_aspects")
@@ -52,18 +54,18 @@ def format_regions(data: Mapping[str, Any]) -> str:
             [
                 str(region["id"]),
                 *([("det A > 0" if region["sign"] > 0 else "det A < 0")] if signed else []),
-                _area(region["area"]),
+                _area(region[measure]),
                 options.three_valued(region["equals_workspace"]),
             ]
             for region in data["regions"]
         ]
-        head = ["region", *(["sign"] if signed else []), "area", "equals workspace"]
+        head = ["region", *(["sign"] if signed else []), measure, "equals workspace"]
         lines.append(options.format_table(head, rows))
     lines.append(f"workspace N-connected: {options.three_valued(data['n_connected'])}")
     undecided = data.get("undecided")
     if undecided:
         lines.append(
-            f"undecided at this precision: {undecided['boundary_area']:.6g} of area in "
+            f"undecided at this precision: {undecided[f'boundary_{measure}']:.6g} of {measure} in "
             f"undecided cells; {undecided['components']} possible region(s) without a "
             f"certified part, {undecided['detached']} certified part(s) of unknown region"
         )

@@ -8,19 +8,25 @@ from typing import Any
 from ..errors import InvalidParameterError
 from ..limits import JointLimit
 from .base import Mechanism
+from .biglide import Biglide
 from .five_bar import FiveBar
+from .three_rpr import ThreeRPR
 
-__all__ = ["MECHANISMS", "FiveBar", "Mechanism", "from_spec"]
+__all__ = ["MECHANISMS", "Biglide", "FiveBar", "Mechanism", "ThreeRPR", "from_spec"]
 
-MECHANISMS: dict[str, type[Mechanism]] = {"five-bar": FiveBar}
+MECHANISMS: dict[str, type[Mechanism]] = {
+    "five-bar": FiveBar,
+    "3-RPR": ThreeRPR,
+    "biglide": Biglide,
+}
 
 
-def _limit(name: str, value: Any) -> JointLimit:
-    if isinstance(value, str) and value == "unlimited":
+def _limit(name: str, value: Any, prismatic: bool = False) -> JointLimit:
+    if isinstance(value, str) and value == "unlimited" and not prismatic:
         return JointLimit.unlimited()
     try:
         lo, hi = value
-        return JointLimit(float(lo), float(hi))
+        return JointLimit(float(lo), float(hi), prismatic=prismatic)
     except InvalidParameterError as exc:
         raise InvalidParameterError(f"limits.{name}", exc.allowed, exc.received) from None
     except (TypeError, ValueError):
@@ -45,14 +51,29 @@ def from_spec(spec: Mapping[str, Any]) -> Mechanism:
         raise InvalidParameterError("mechanism", f"one of {sorted(MECHANISMS)}", name)
     params = dict(spec.get("parameters", {}))
     limits_spec = spec.get("limits", {})
-    if name == "five-bar":
-        for joint in ("theta1", "theta2"):
+
+    def limits(*joints: str, prismatic: bool = False) -> tuple[JointLimit, ...]:
+        for joint in joints:
             if joint not in limits_spec:
                 raise InvalidParameterError(f"limits.{joint}", "[lo, hi] or 'unlimited'", "nothing")
-        limits = tuple(_limit(j, limits_spec[j]) for j in ("theta1", "theta2"))
-        missing = [k for k in ("L0", "L1", "L2", "L3", "L4") if k not in params]
+        return tuple(_limit(j, limits_spec[j], prismatic) for j in joints)
+
+    def parameters(*names: str) -> list[Any]:
+        missing = [k for k in names if k not in params]
         if missing:
-            raise InvalidParameterError(f"parameters.{missing[0]}", "a positive length", "nothing")
-        L0, L1, L2, L3, L4 = (float(params[k]) for k in ("L0", "L1", "L2", "L3", "L4"))
-        return FiveBar(L0, L1, L2, L3, L4, limits=(limits[0], limits[1]))
+            raise InvalidParameterError(f"parameters.{missing[0]}", "a value", "nothing")
+        return [params[k] for k in names]
+
+    if name == "five-bar":
+        lim = limits("theta1", "theta2")
+        L0, L1, L2, L3, L4 = (float(v) for v in parameters("L0", "L1", "L2", "L3", "L4"))
+        return FiveBar(L0, L1, L2, L3, L4, limits=(lim[0], lim[1]))
+    if name == "3-RPR":
+        lim = limits("rho1", "rho2", "rho3", prismatic=True)
+        base, platform = parameters("base", "platform")
+        return ThreeRPR(base, platform, (lim[0], lim[1], lim[2]))
+    if name == "biglide":
+        lim = limits("rho1", "rho2", prismatic=True)
+        L1, L2 = (float(v) for v in parameters("L1", "L2"))
+        return Biglide(L1, L2, (lim[0], lim[1]))
     raise InvalidParameterError("mechanism", f"one of {sorted(MECHANISMS)}", name)

@@ -41,6 +41,8 @@ __all__ = [
     "LegReach",
     "Mechanism",
     "interval_det",
+    "round_down",
+    "round_up",
 ]
 
 REACH_OUT, REGULAR, FOLD_OUTER, FOLD_INNER, REACH_UNKNOWN = 0, 1, 2, 3, 4
@@ -96,6 +98,16 @@ class Leg(Protocol):
     def reach(self, lo: Array, hi: Array) -> LegReach: ...
 
 
+def round_up(value: float) -> float:
+    """The next float above ``value``: a sum or product rounded outwards."""
+    return float(np.nextafter(value, np.inf))
+
+
+def round_down(value: float) -> float:
+    """The next float below ``value``."""
+    return float(np.nextafter(value, -np.inf))
+
+
 def interval_det(rows: list[list[Interval]]) -> Interval:
     """Enclosure of the determinant of a square matrix of intervals (cofactor expansion).
 
@@ -136,18 +148,17 @@ class Mechanism:
     limits: tuple[JointLimit, ...]
     #: box of poses holding the workspace: (lo, hi)
     bounds: tuple[Array, Array]
-    #: pose axes that wrap around (an orientation angle over one full turn of the box)
+    #: orientation angles that turn freely (radians); their bounds span a little
+    #: more than [-pi, pi], so that the leaves cover every angle
     periodic_axes: tuple[int, ...] = ()
 
     def wrap_poses(self, points: Array) -> Array:
-        """Poses with their periodic coordinates brought into the bounds' turn."""
+        """Poses with their periodic angles brought into ``[-pi, pi)``."""
         if not self.periodic_axes:
             return points
         out = np.array(points, dtype=np.float64, copy=True)
-        lo, hi = self.bounds
         for axis in self.periodic_axes:
-            span = hi[axis] - lo[axis]
-            out[:, axis] = lo[axis] + np.mod(out[:, axis] - lo[axis], span)
+            out[:, axis] = np.mod(out[:, axis] + np.pi, 2.0 * np.pi) - np.pi
         return out
 
     @property

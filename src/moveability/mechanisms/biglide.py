@@ -1,0 +1,185 @@
+"""The biglide: two prismatic actuators sliding on one line, two legs meeting at P.
+
+Slider i sits at ``(rho_i, 0)`` on the x axis; a leg of fixed length ``L_i``
+joins it to the platform point ``P = (x, y)``:
+``F_i = (x - rho_i)^2 + y^2 - L_i^2``. Each leg has two inverse-kinematic
+solutions, ``rho_i = x + sqrt(L_i^2 - y^2)`` (branch 0, the slider ahead of P)
+and ``x - sqrt(L_i^2 - y^2)`` (branch 1): four postures. Half the pose gradient
+``(x - rho_i, y)`` is the row of A, so ``det A = y (rho_2 - rho_1)``: parallel
+singularities on the line of the sliders and where the sliders meet. Half the
+joint derivative, ``rho_i - x``, is the leg's term of B: serial singularities
+where a leg stands perpendicular to the line, ``|y| = L_i``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .. import intervals as iv
+from ..errors import InvalidParameterError
+from ..intervals import Interval
+from ..limits import JointLimit
+from .base import (
+    FOLD_OUTER,
+    REACH_OUT,
+    REACH_UNKNOWN,
+    REGULAR,
+    LegReach,
+    Mechanism,
+    round_down,
+    round_up,
+)
+
+__all__ = ["Biglide", "SliderLeg"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class SliderLeg:
+    """A leg of length ``length`` from a slider on the x axis to the platform point.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> SliderLeg(5.0, "rho1").angles(np.array([[1.0, 3.0]])).tolist()
+    [[5.0, -3.0]]
+    """
+
+    length: float
+    joint: str
+
+    n_branches = 2
+
+    def angles(self, points: Array, clip: bool = False) -> Array:
+        """Slider positions of both branches, shape (m, 2); NaN where unreachable.
+
+        With ``clip``, poses beyond the reach by rounding only (1e-12 relative)
+        get the perpendicular leg.
+        """
+        p = np.asarray(points, dtype=np.float64)
+        h2 = self.length**2 - p[:, 1] ** 2
+        if clip:
+            h2 = np.where(h2 >= -1e-12 * self.length**2, np.maximum(h2, 0.0), h2)
+        with np.errstate(invalid="ignore"):
+            h = np.sqrt(h2)
+        return np.stack([p[:, 0] + h, p[:, 0] - h], axis=1)
+
+    def constraint(self, points: Array, angles: Array) -> Array:
+        p = np.asarray(points, dtype=np.float64)
+        return (p[..., 0] - angles) ** 2 + p[..., 1] ** 2 - self.length**2
+
+    def a_row(self, points: Array, angles: Array) -> Array:
+        p = np.asarray(points, dtype=np.float64)
+        return np.stack([p[..., 0] - angles, p[..., 1]], axis=-1)
+
+    def serial_term(self, points: Array, angles: Array) -> Array:
+        return np.asarray(angles, dtype=np.float64) - np.asarray(points, dtype=np.float64)[..., 0]
+
+    def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]:
+        return [Interval(lo[:, 0], hi[:, 0]) - angles, Interval(lo[:, 1], hi[:, 1])]
+
+    def reach(self, lo: Array, hi: Array) -> LegReach:
+        """REGULAR where ``|y| < L`` on the whole box, REACH_OUT where ``|y| > L``;
+        FOLD_OUTER where the box holds poses on both sides. The reachable part of
+        a box, the box cut by the strip ``|y| <= L``, is convex and meets the
+        fold line, so every configuration joins the fold: the fold is connected."""
+        y = Interval(lo[:, 1], hi[:, 1])
+        y2 = iv.square(y)
+        L2 = iv.square(iv.as_interval(self.length))
+        out = y2.lo > L2.hi
+        regular = y2.hi < L2.lo
+        # the pose of the box nearest the line, and the farthest: on both sides of |y| = L
+        near = iv.square(Interval(np.clip(0.0, lo[:, 1], hi[:, 1])))
+        far = iv.square(Interval(np.where(-lo[:, 1] > hi[:, 1], lo[:, 1], hi[:, 1])))
+        fold = (near.hi < L2.lo) & (far.lo > L2.hi)
+        status = np.full(lo.shape[0], REACH_UNKNOWN, dtype=np.uint8)
+        status[fold] = FOLD_OUTER
+        status[regular] = REGULAR
+        status[out] = REACH_OUT
+        with np.errstate(invalid="ignore"):
+            h = iv.sqrt(Interval(np.maximum(L2.lo - y2.hi, 0.0), np.maximum(L2.hi - y2.lo, 0.0)))
+        x = Interval(lo[:, 0], hi[:, 0])
+        branches = [x + h, x - h]
+        hull = x + Interval(-h.hi, h.hi)
+        unknown = status == REACH_UNKNOWN
+        hull = Interval(np.where(unknown, -np.inf, hull.lo), np.where(unknown, np.inf, hull.hi))
+        return LegReach(
+            status=status, branches=branches, hull=hull, fold_connected=status == FOLD_OUTER
+        )
+
+    def fold_waypoints(self, lo: Array, hi: Array, status: int) -> tuple[Array, Array]:
+        """Hub and fold point of a box where the leg folds: one pose on the fold line
+        (just inside the reach), which every reachable pose of the convex
+        reachable part joins by a segment."""
+        # the box holds y = L or y = -L strictly; there L^2 - y^2 is 0 in floats too
+        y = self.length if hi[1] > self.length else -self.length
+        point = np.array([0.5 * (lo[0] + hi[0]), y])
+        return point, point
+
+
+class Biglide(Mechanism):
+    """The biglide: two sliders on the x axis, legs of lengths L1 and L2 meeting at P.
+
+    Parameters
+    ----------
+    L1, L2 : float
+        Leg lengths.
+    limits : tuple of two JointLimit
+        Strokes of rho1 and rho2 (prismatic limits on the x axis).
+
+    Examples
+    --------
+    >>> from moveability.limits import JointLimit
+    >>> m = Biglide(5.0, 4.0, (JointLimit(-6, 6, prismatic=True),) * 2)
+    >>> m.postures.shape, [round(float(v), 2) for v in m.bounds[1]]
+    ((4, 2), [10.02, 4.01])
+
+    With legs of equal lengths, the postures ``++`` and ``--`` put both sliders
+    at one place: det A vanishes on their whole sheets and they are never valid.
+    """
+
+    name = "biglide"
+    pose_names = ("x", "y")
+
+    def __init__(
+        self, L1: float = 5.0, L2: float = 4.0, limits: tuple[JointLimit, JointLimit] | None = None
+    ) -> None:
+        for name, value in (("L1", L1), ("L2", L2)):
+            if not (np.isfinite(value) and value > 0):
+                raise InvalidParameterError(f"parameters.{name}", "a positive length", value)
+        self.lengths = (float(L1), float(L2))
+        if limits is None:
+            limits = (JointLimit(-6.0, 6.0, prismatic=True), JointLimit(-6.0, 6.0, prismatic=True))
+        if len(limits) != 2 or not all(lim.prismatic for lim in limits):
+            raise InvalidParameterError("limits", "two prismatic strokes", limits)
+        self.limits = tuple(limits)
+        self.legs = (SliderLeg(self.lengths[0], "rho1"), SliderLeg(self.lengths[1], "rho2"))
+        x_lo = max(round_down(lim.lo - L) for lim, L in zip(self.limits, self.lengths, strict=True))
+        x_hi = min(round_up(lim.hi + L) for lim, L in zip(self.limits, self.lengths, strict=True))
+        if not x_lo < x_hi:
+            raise InvalidParameterError(
+                "limits", "strokes that let the two legs meet", self._strokes()
+            )
+        y_max = min(self.lengths)
+        lo = np.array([x_lo, -y_max])
+        hi = np.array([x_hi, y_max])
+        pad = 1e-3 * (hi - lo) + 4 * np.spacing(np.abs(np.concatenate([lo, hi])).max())
+        self.bounds = (lo - pad, hi + pad)
+
+    def _strokes(self) -> dict[str, list[float]]:
+        return {f"rho{i + 1}": [lim.lo, lim.hi] for i, lim in enumerate(self.limits)}
+
+    def to_spec(self) -> dict[str, object]:
+        """The spec mapping of this mechanism (see :func:`moveability.spec.load_spec`)."""
+        return {
+            "mechanism": self.name,
+            "parameters": {"L1": self.lengths[0], "L2": self.lengths[1]},
+            "limits": self._strokes(),
+        }
+
+    def __repr__(self) -> str:
+        return f"Biglide(L1={self.lengths[0]:g}, L2={self.lengths[1]:g}, limits={self._strokes()})"

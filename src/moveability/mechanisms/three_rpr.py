@@ -1,0 +1,207 @@
+"""The planar 3-RPR: three legs from base joints A_i to platform points B_i.
+
+The pose is ``(x, y, phi)``: the platform frame's origin P and its orientation.
+In that frame the platform points are ``b_i``, so ``B_i = P + R(phi) b_i``. Each
+leg's prismatic actuator measures ``rho_i = |B_i - A_i|``: one inverse-kinematic
+solution, hence one posture. The constraint is
+``F_i = |B_i - A_i|^2 - rho_i^2``; half its pose gradient is the row of A,
+
+``(d_x, d_y, (R b_i) x (P - A_i))`` with ``d = B_i - A_i``,
+
+and half its joint derivative, ``-rho_i``, is the leg's term of B (a serial
+singularity only where a leg has zero length). ``phi`` turns freely: the third
+pose axis is periodic, over ``[-pi, pi]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .. import intervals as iv
+from ..errors import InvalidParameterError
+from ..intervals import Interval
+from ..limits import JointLimit
+from .base import REACH_UNKNOWN, REGULAR, LegReach, Mechanism, round_down, round_up
+
+__all__ = ["RPRLeg", "ThreeRPR"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class RPRLeg:
+    """A revolute-prismatic-revolute leg from ``base`` to the platform point ``platform``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> leg = RPRLeg((0.0, 0.0), (1.0, 0.0), "rho1")
+    >>> leg.angles(np.array([[3.0, 4.0, 0.0]])).round(6).tolist()
+    [[5.656854]]
+    """
+
+    base: tuple[float, float]
+    platform: tuple[float, float]
+    joint: str
+
+    n_branches = 1
+
+    # ------------------------------------------------------------- points
+    def _target(self, points: Array) -> tuple[Array, Array, Array, Array]:
+        """``d = B - A`` and ``R(phi) b`` at poses (x, y, phi)."""
+        p = np.asarray(points, dtype=np.float64)
+        c, s = np.cos(p[..., 2]), np.sin(p[..., 2])
+        bx, by = self.platform
+        rbx, rby = c * bx - s * by, s * bx + c * by
+        return p[..., 0] + rbx - self.base[0], p[..., 1] + rby - self.base[1], rbx, rby
+
+    def angles(self, points: Array, clip: bool = False) -> Array:
+        """The actuator length at each pose, shape (m, 1) (every pose is reachable)."""
+        dx, dy, _, _ = self._target(points)
+        return np.hypot(dx, dy)[:, None]
+
+    def constraint(self, points: Array, angles: Array) -> Array:
+        """``F = |B - A|^2 - rho^2``."""
+        dx, dy, _, _ = self._target(points)
+        rho = np.asarray(angles, dtype=np.float64)
+        return dx * dx + dy * dy - rho * rho
+
+    def a_row(self, points: Array, angles: Array) -> Array:
+        """Half the pose gradient of F, shape (..., 3)."""
+        p = np.asarray(points, dtype=np.float64)
+        dx, dy, rbx, rby = self._target(p)
+        turn = rbx * (p[..., 1] - self.base[1]) - rby * (p[..., 0] - self.base[0])
+        return np.stack([dx, dy, turn], axis=-1)
+
+    def serial_term(self, points: Array, angles: Array) -> Array:
+        """Half the joint derivative of F: ``-rho``."""
+        return -np.asarray(angles, dtype=np.float64)
+
+    # ------------------------------------------------------------- boxes
+    def _target_boxes(self, lo: Array, hi: Array) -> tuple[Interval, Interval, Interval, Interval]:
+        phi = Interval(lo[:, 2], hi[:, 2])
+        c, s = iv.cos(phi), iv.sin(phi)
+        bx, by = self.platform
+        rbx = c * bx - s * by
+        rby = s * bx + c * by
+        dx = Interval(lo[:, 0], hi[:, 0]) + rbx - self.base[0]
+        dy = Interval(lo[:, 1], hi[:, 1]) + rby - self.base[1]
+        return dx, dy, rbx, rby
+
+    def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]:
+        """Enclosure of the row of A over boxes of poses."""
+        dx, dy, rbx, rby = self._target_boxes(lo, hi)
+        px = Interval(lo[:, 0], hi[:, 0]) - self.base[0]
+        py = Interval(lo[:, 1], hi[:, 1]) - self.base[1]
+        return [dx, dy, rbx * py - rby * px]
+
+    def reach(self, lo: Array, hi: Array) -> LegReach:
+        """Every pose is reachable; REGULAR where the length certainly does not vanish."""
+        dx, dy, _, _ = self._target_boxes(lo, hi)
+        rho = iv.sqrt(iv.square(dx) + iv.square(dy))
+        status = np.where(rho.lo > 0, REGULAR, REACH_UNKNOWN).astype(np.uint8)
+        return LegReach(
+            status=status,
+            branches=[rho],
+            hull=rho,
+            fold_connected=np.zeros(lo.shape[0], dtype=bool),
+        )
+
+    def fold_waypoints(self, lo: Array, hi: Array, status: int) -> tuple[Array, Array]:
+        raise ValueError("an RPR leg has one branch: it never changes posture")
+
+
+def _points(value: object, name: str) -> tuple[tuple[float, float], ...]:
+    try:
+        pts = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(name, "three points [x, y]", value) from None
+    if pts.shape != (3, 2) or not np.isfinite(pts).all():
+        raise InvalidParameterError(name, "three points [x, y] with finite coordinates", value)
+    return tuple((float(p[0]), float(p[1])) for p in pts)
+
+
+class ThreeRPR(Mechanism):
+    """The planar 3-RPR parallel manipulator.
+
+    Parameters
+    ----------
+    base : (3, 2) array_like
+        Base joints A_i.
+    platform : (3, 2) array_like
+        Platform joints b_i in the platform frame.
+    limits : tuple of three JointLimit
+        Strokes of rho1..rho3 (prismatic limits).
+
+    Examples
+    --------
+    >>> from moveability.limits import JointLimit
+    >>> stroke = JointLimit(10.0, 25.0, prismatic=True)
+    >>> m = ThreeRPR([[0, 0], [15.91, 0], [0, 10]], [[0, 0], [17.04, 0], [13.24, 16.1]],
+    ...              (stroke, stroke, stroke))
+    >>> m.pose_names, m.periodic_axes, m.postures.shape
+    (('x', 'y', 'phi'), (2,), (1, 3))
+    """
+
+    name = "3-RPR"
+    pose_names = ("x", "y", "phi")
+    periodic_axes = (2,)
+
+    def __init__(
+        self,
+        base: object,
+        platform: object,
+        limits: tuple[JointLimit, JointLimit, JointLimit],
+    ) -> None:
+        self.base = _points(base, "parameters.base")
+        self.platform = _points(platform, "parameters.platform")
+        if len(limits) != 3 or not all(lim.prismatic for lim in limits):
+            raise InvalidParameterError("limits", "three prismatic strokes", limits)
+        for i, lim in enumerate(limits):
+            if lim.lo < 0:
+                raise InvalidParameterError(
+                    f"limits.rho{i + 1}", "a stroke with 0 <= lo", (lim.lo, lim.hi)
+                )
+        self.limits = tuple(limits)
+        self.legs = tuple(
+            RPRLeg(a, b, f"rho{i + 1}")
+            for i, (a, b) in enumerate(zip(self.base, self.platform, strict=True))
+        )
+        # |P - A_i| <= rho_max_i + |b_i|: the box holds the intersection of those disks
+        lo = np.full(2, -np.inf)
+        hi = np.full(2, np.inf)
+        for a, b, lim in zip(self.base, self.platform, self.limits, strict=True):
+            r = round_up(round_up(lim.hi) + round_up(float(np.hypot(*b))))
+            lo = np.maximum(lo, [round_down(a[0] - r), round_down(a[1] - r)])
+            hi = np.minimum(hi, [round_up(a[0] + r), round_up(a[1] + r)])
+        if not (lo < hi).all():
+            raise InvalidParameterError(
+                "limits", "strokes long enough for the three legs to meet", self._strokes()
+            )
+        pad = 1e-3 * (hi - lo) + 4 * np.spacing(np.abs(np.concatenate([lo, hi])).max())
+        # a little more than one turn: the leaves cover every angle (the float pi is short)
+        turn = round_up(np.pi)
+        self.bounds = (
+            np.array([lo[0] - pad[0], lo[1] - pad[1], -turn]),
+            np.array([hi[0] + pad[0], hi[1] + pad[1], turn]),
+        )
+
+    def _strokes(self) -> dict[str, list[float]]:
+        return {f"rho{i + 1}": [lim.lo, lim.hi] for i, lim in enumerate(self.limits)}
+
+    def to_spec(self) -> dict[str, object]:
+        """The spec mapping of this mechanism (see :func:`moveability.spec.load_spec`)."""
+        return {
+            "mechanism": self.name,
+            "parameters": {
+                "base": [list(a) for a in self.base],
+                "platform": [list(b) for b in self.platform],
+            },
+            "limits": self._strokes(),
+        }
+
+    def __repr__(self) -> str:
+        return f"ThreeRPR(base={self.base}, platform={self.platform}, limits={self._strokes()})"
