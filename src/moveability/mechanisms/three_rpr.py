@@ -98,6 +98,22 @@ class RPRLeg:
         py = Interval(lo[:, 1], hi[:, 1]) - self.base[1]
         return [dx, dy, rbx * py - rby * px]
 
+    def a_row_derivatives(self, lo: Array, hi: Array) -> list[list[Interval]]:
+        """Enclosures of the derivatives of the row of A along x, y and phi over boxes."""
+        phi = Interval(lo[:, 2], hi[:, 2])
+        c, s = iv.cos(phi), iv.sin(phi)
+        bx, by = self.platform
+        rbx = c * bx - s * by
+        rby = s * bx + c * by
+        px = Interval(lo[:, 0], hi[:, 0]) - self.base[0]
+        py = Interval(lo[:, 1], hi[:, 1]) - self.base[1]
+        one, zero = iv.as_interval(np.ones(lo.shape[0])), iv.as_interval(np.zeros(lo.shape[0]))
+        return [
+            [one, zero, -rby],
+            [zero, one, rbx],
+            [-rby, rbx, -(rbx * px + rby * py)],
+        ]
+
     def reach(self, lo: Array, hi: Array) -> LegReach:
         """Every pose is reachable; REGULAR where the length certainly does not vanish."""
         dx, dy, _, _ = self._target_boxes(lo, hi)
@@ -189,6 +205,25 @@ class ThreeRPR(Mechanism):
             np.array([hi[0] + pad[0], hi[1] + pad[1], turn]),
         )
 
+    def det_a_boxes(self, lo: Array, hi: Array, angles: list[Interval]) -> Interval:
+        """Enclosure of det A over boxes: the rows depend on the pose only, so the
+        mean-value form ``D(c) + sum_j dD/dx_j(box) (x_j - c_j)`` about the centre
+        ``c`` encloses it too; the narrower of the two (intersected) is kept."""
+        natural = super().det_a_boxes(lo, hi, angles)
+        mid = 0.5 * (lo + hi)
+        at_mid = _det3(*[leg.a_row_boxes(mid, mid, angles[i]) for i, leg in enumerate(self.legs)])
+        rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.legs)]
+        grads = [leg.a_row_derivatives(lo, hi) for leg in self.legs]
+        total = at_mid
+        for axis in range(3):
+            d = (
+                _det3(grads[0][axis], rows[1], rows[2])
+                + _det3(rows[0], grads[1][axis], rows[2])
+                + _det3(rows[0], rows[1], grads[2][axis])
+            )
+            total = total + d * (Interval(lo[:, axis], hi[:, axis]) - mid[:, axis])
+        return Interval(np.maximum(natural.lo, total.lo), np.minimum(natural.hi, total.hi))
+
     def _strokes(self) -> dict[str, list[float]]:
         return {f"rho{i + 1}": [lim.lo, lim.hi] for i, lim in enumerate(self.limits)}
 
@@ -205,3 +240,12 @@ class ThreeRPR(Mechanism):
 
     def __repr__(self) -> str:
         return f"ThreeRPR(base={self.base}, platform={self.platform}, limits={self._strokes()})"
+
+
+def _det3(r0: list[Interval], r1: list[Interval], r2: list[Interval]) -> Interval:
+    """Enclosure of a 3x3 determinant given by rows (cofactor expansion on row 0)."""
+    return (
+        r0[0] * (r1[1] * r2[2] - r1[2] * r2[1])
+        - r0[1] * (r1[0] * r2[2] - r1[2] * r2[0])
+        + r0[2] * (r1[0] * r2[1] - r1[1] * r2[0])
+    )
