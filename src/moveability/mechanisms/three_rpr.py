@@ -182,10 +182,11 @@ class ThreeRPR(Mechanism):
                     f"limits.rho{i + 1}", "a stroke with 0 <= lo", (lim.lo, lim.hi)
                 )
         self.limits = tuple(limits)
-        self.legs = tuple(
+        self.rpr_legs = tuple(
             RPRLeg(a, b, f"rho{i + 1}")
             for i, (a, b) in enumerate(zip(self.base, self.platform, strict=True))
         )
+        self.legs = self.rpr_legs
         # |P - A_i| <= rho_max_i + |b_i|: the box holds the intersection of those disks
         lo = np.full(2, -np.inf)
         hi = np.full(2, np.inf)
@@ -213,7 +214,7 @@ class ThreeRPR(Mechanism):
         mid = 0.5 * (lo + hi)
         at_mid = _det3(*[leg.a_row_boxes(mid, mid, angles[i]) for i, leg in enumerate(self.legs)])
         rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.legs)]
-        grads = [leg.a_row_derivatives(lo, hi) for leg in self.legs]
+        grads = [leg.a_row_derivatives(lo, hi) for leg in self.rpr_legs]
         total = at_mid
         for axis in range(3):
             d = (
