@@ -489,7 +489,9 @@ class Analysis:
         """The summary as a JSON-ready dict (the ``regions --json`` document)."""
         measure = self.measure_name
         return {
-            "precision": self.precision,
+            "precision": (
+                list(self.precision) if isinstance(self.precision, tuple) else self.precision
+            ),
             "pose": list(self.mechanism.pose_names),
             "workspace": {measure: list(self.workspace[measure])},
             "regions": [

@@ -1,0 +1,174 @@
+"""The 3-RPR against a brute-force labelling of a grid over (x, y, phi).
+
+One posture per pose: a region is a connected set of poses where the three
+lengths are within their strokes and det A keeps one sign. The reference
+computes, at every node of a uniform grid (phi periodic), the closed-form
+lengths and det A, and labels the valid nodes of each sign with 26-connectivity,
+joining labels across the phi seam. The tree analysis must agree with it:
+
+* a resolved region's certified leaves hold grid nodes of one grid component;
+* two resolved regions never share a grid component;
+* every valid grid node lies in a leaf whose possible part of its sign is
+  alive, and one grid component never meets two possible components;
+* pointwise answers of ``locate`` agree with the closed form.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from moveability import analyze
+from moveability.limits import JointLimit
+from moveability.measurement import locate
+from moveability.mechanisms import ThreeRPR
+from moveability.status import BOUNDARY, IN
+
+PAPER_LIKE = ([[0, 0], [15.91, 0], [0, 10]], [[0, 0], [17.04, 0], [13.24, 16.10]], (10, 25))
+DESIGNS = [
+    PAPER_LIKE,
+    ([[0, 0], [10, 0], [4, 8]], [[0, 0], [5, 0], [2, 4]], (4, 12)),
+    ([[0, 0], [12, 1], [-2, 9]], [[1, -1], [6, 0], [3, 5]], (3, 14)),
+]
+
+
+def _mechanism(design):
+    base, platform, (lo, hi) = design
+    stroke = JointLimit(float(lo), float(hi), prismatic=True)
+    return ThreeRPR(base, platform, (stroke, stroke, stroke))
+
+
+def _join_periodic(labels, axis):
+    """Merge labels that meet across the two ends of a periodic axis."""
+    first = np.take(labels, 0, axis=axis).ravel()
+    last = np.take(labels, -1, axis=axis).ravel()
+    parent = np.arange(labels.max() + 1)
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for a, b in zip(first, last, strict=True):
+        if a and b:
+            ra, rb = find(a), find(b)
+            if ra != rb:
+                parent[max(ra, rb)] = min(ra, rb)
+    roots = np.array([find(a) for a in range(parent.size)])
+    return roots[labels]
+
+
+class GridReference:
+    """Valid nodes of a grid over the box, their sign of det A, and their labels."""
+
+    def __init__(self, m, n=(120, 120, 96)):
+        lo, hi = m.bounds
+        axes = [np.linspace(lo[i], hi[i], n[i], endpoint=i != 2) for i in range(3)]
+        grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+        self.points = grid.reshape(-1, 3)
+        self.valid, self.det = self.evaluate(m, self.points)
+        self.labels = np.zeros(self.points.shape[0], dtype=np.int64)
+        offset = 0
+        for s in (1, -1):
+            mask = (self.valid & (np.sign(self.det) == s)).reshape(n)
+            lab, count = ndimage.label(mask, structure=np.ones((3, 3, 3)))
+            lab = _join_periodic(lab, axis=2)
+            flat = lab.ravel()
+            self.labels[flat > 0] = flat[flat > 0] + offset
+            offset += count + 1
+
+    @staticmethod
+    def evaluate(m, points):
+        q = m.joint_angles(points)[:, 0, :]
+        valid = np.ones(points.shape[0], dtype=bool)
+        for i, lim in enumerate(m.limits):
+            valid &= (q[:, i] >= lim.lo) & (q[:, i] <= lim.hi)
+        det = m.det_a(points, q)
+        return valid, det
+
+
+@pytest.fixture(scope="module", params=range(len(DESIGNS)))
+def case(request):
+    m = _mechanism(DESIGNS[request.param])
+    result = analyze(m, precision=(1.0, 1.0, 0.15))
+    return result, GridReference(m)
+
+
+def test_certified_regions_match_grid_components(case):
+    result, ref = case
+    g, t = result.graph, result.table
+    status, leaf = locate(result.tree, ref.points)
+    seen: dict[int, int] = {}
+    for region in result.regions:
+        certified = (g.certain[:, 0] == region.certain) & (t.status[:, 0] == IN)
+        nodes = certified[np.maximum(leaf, 0)] & (leaf >= 0)
+        assert ref.valid[nodes].all()
+        assert (np.sign(ref.det[nodes]) == region.sign).all()
+        labels = set(np.unique(ref.labels[nodes]).tolist())
+        assert len(labels) == 1, (region, labels)
+        label = labels.pop()
+        assert label not in seen, (region, seen)
+        seen[label] = region.id
+
+
+def test_grid_nodes_lie_in_the_possible_parts(case):
+    result, ref = case
+    g = result.graph
+    _, leaf = locate(result.tree, ref.points)
+    inside = ref.valid & (leaf >= 0) & (np.abs(ref.det) > 0)
+    assert (leaf[ref.valid] >= 0).all()
+    row = np.where(ref.det > 0, 0, 1)
+    # one posture: the sub-nodes of posture 0 are the first `slots` columns
+    possible = np.where(
+        inside, g.possible[row, np.maximum(leaf, 0), 0], -1
+    )  # prismatic joints: one slot
+    assert g.slots == 1
+    assert (possible[inside] >= 0).all()
+    for label in np.unique(ref.labels[inside]):
+        nodes = inside & (ref.labels == label)
+        assert np.unique(possible[nodes] + 1000 * row[nodes]).size == 1
+
+
+def test_locate_is_true_pose_by_pose(case):
+    result, ref = case
+    m = result.mechanism
+    rng = np.random.default_rng(3)
+    lo, hi = m.bounds
+    pts = rng.uniform(lo, hi, size=(1500, 3))
+    pts[:, 2] += rng.integers(-2, 3, size=1500) * 2 * np.pi  # any turn
+    valid, det = GridReference.evaluate(m, pts)
+    answers = result.locate(pts)["points"]
+    definite = 0
+    for k, answer in enumerate(answers):
+        assert answer["workspace"] != "in" or valid[k]
+        assert answer["workspace"] != "out" or not valid[k]
+        for region in result.regions:
+            verdict = answer["regions"][str(region.id)]
+            if verdict == "in":
+                assert valid[k] and np.sign(det[k]) == region.sign
+            definite += verdict != "unknown"
+    assert definite > 0
+
+
+def test_precision_per_axis_and_volumes():
+    m = _mechanism(PAPER_LIKE)
+    result = analyze(m, precision=(2.0, 2.0, 0.3))
+    data = result.to_dict()
+    assert data["pose"] == ["x", "y", "phi"]
+    assert data["precision"] == [2.0, 2.0, 0.3]
+    assert "volume" in data["workspace"] and "area" not in data["workspace"]
+    inner, outer = data["workspace"]["volume"]
+    # a grid estimate of the workspace volume lies within the bounds
+    ref = GridReference(m, n=(100, 100, 80))
+    lo, hi = m.bounds
+    cell = np.prod((hi - lo) / np.array([99, 99, 80]))
+    assert inner <= ref.valid.sum() * cell * 1.02
+    assert ref.valid.sum() * cell * 0.98 <= outer
+    # undecided leaves were refined to the precision of each axis, not finer
+    leaves = result.tree.leaves()
+    undecided = result.tree.status == BOUNDARY
+    widths = (leaves.hi - leaves.lo)[undecided]
+    assert (widths[:, :2] <= 2.0).all() and (widths[:, 2] <= 0.3).all()
+    assert (widths[:, :2] > 1.0).any() and (widths[:, 2] > 0.15).any()
