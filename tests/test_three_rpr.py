@@ -99,7 +99,7 @@ def case(request):
 def test_certified_regions_match_grid_components(case):
     result, ref = case
     g, t = result.graph, result.table
-    status, leaf = locate(result.tree, ref.points)
+    _, leaf = locate(result.tree, ref.points)
     seen: dict[int, int] = {}
     for region in result.regions:
         certified = (g.certain[:, 0] == region.certain) & (t.status[:, 0] == IN)
@@ -132,7 +132,7 @@ def test_grid_nodes_lie_in_the_possible_parts(case):
 
 
 def test_locate_is_true_pose_by_pose(case):
-    result, ref = case
+    result, _ = case
     m = result.mechanism
     rng = np.random.default_rng(3)
     lo, hi = m.bounds
@@ -172,3 +172,40 @@ def test_precision_per_axis_and_volumes():
     widths = (leaves.hi - leaves.lo)[undecided]
     assert (widths[:, :2] <= 2.0).all() and (widths[:, 2] <= 0.3).all()
     assert (widths[:, :2] > 1.0).any() and (widths[:, 2] > 0.15).any()
+
+
+def test_planned_motions_are_continuous_across_the_seam(case):
+    """Motions between certified leaves of each region: poses continuous (phi
+    unwrapped), lengths within strokes, one sign of det A, ends equal to the poses
+    asked modulo 2 pi. Where a region's certified part reaches both ends of the phi
+    range, a motion between nearby poses on either side crosses the seam."""
+    result, _ = case
+    leaves = result.tree.leaves()
+    centres = 0.5 * (leaves.lo + leaves.hi)
+    lo, hi = result.mechanism.bounds
+    step = float(result.precisions.min())
+    for region in result.regions:
+        ok = (result.graph.certain[:, 0] == region.certain) & (result.table.status[:, 0] == IN)
+        pts = centres[ok]
+        pairs = [(pts[np.argmin(pts[:, 2])], pts[np.argmax(pts[:, 2])])]
+        top, bottom = ok & (leaves.hi[:, 2] >= hi[2]), ok & (leaves.lo[:, 2] <= lo[2])
+        seam = bool(top.any() and bottom.any())
+        if seam:
+            a = centres[np.flatnonzero(top)[0]]
+            below = centres[bottom]
+            b = below[np.argmin(np.linalg.norm(below[:, :2] - a[:2], axis=1))]
+            pairs.append((a, b))
+        for a, b in pairs:
+            motion = result.plan([a, b])
+            path = np.array([s["pose"] for s in motion["path"]])
+            joints = np.array([s["joints"] for s in motion["path"]])
+            assert np.abs(np.diff(path, axis=0)).max() <= step * (1 + 1e-9)
+            assert np.abs(np.diff(joints, axis=0)).max() <= step * (1 + 1e-9)
+            assert np.allclose(path[0], a)
+            turns = (path[-1, 2] - b[2]) / (2 * np.pi)
+            assert np.allclose(path[-1, :2], b[:2]) and abs(turns - round(turns)) < 1e-9
+            valid, det = GridReference.evaluate(result.mechanism, path)
+            assert valid.all() and (np.sign(det) == region.sign).all()
+        if seam:
+            # the short way round: through the seam, one turn from the pose asked
+            assert np.abs(path[:, 2]).max() > np.pi and round(turns) == 1

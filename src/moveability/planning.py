@@ -79,13 +79,32 @@ def _route(analysis: Analysis, start: int, goal: int) -> list[int]:
     return path[::-1]
 
 
+def _touching(analysis: Analysis, lo_u: Array, hi_u: Array, leaf: int, offset: Array) -> Array:
+    """The shift of ``leaf`` (by whole turns of the periodic axes, near ``offset``) that
+    makes it touch the box ``[lo_u, hi_u]``: paths cross the seam of a periodic axis."""
+    leaves = analysis.tree.leaves()
+    shift = offset.copy()
+    for axis in analysis.mechanism.periodic_axes:
+        for turns in (0.0, -1.0, 1.0):
+            c = offset[axis] + turns * 2.0 * np.pi
+            lo_v, hi_v = leaves.lo[leaf, axis] + c, leaves.hi[leaf, axis] + c
+            gap = max(lo_v - hi_u[axis], lo_u[axis] - hi_v)
+            if gap <= 1e-9:
+                shift[axis] = c
+                break
+    return shift
+
+
 def _waypoints(
-    analysis: Analysis, nodes: list[int], begin: Array, end: Array
-) -> list[tuple[Array, int]]:
+    analysis: Analysis, nodes: list[int], begin: Array, end: Array, offset: Array
+) -> tuple[list[tuple[Array, int]], Array]:
     """Poses and postures between which the pose moves in straight segments.
 
     Consecutive waypoints lie in one closed leaf: a leaf whose sheet is certified
     is convex, and the reachable part of a fold leaf is star-shaped about its hub.
+    Poses are unwrapped: a path crossing the seam of a periodic angle goes on past
+    it, the leaves being shifted by whole turns (``offset`` for the first leaf;
+    the offset of the last one is returned with the waypoints).
     """
     t = analysis.table
     n_post = t.status.shape[1]
@@ -97,9 +116,12 @@ def _waypoints(
             return None
         legs = tuple(int(i) for i in np.flatnonzero(t.folding[leaf]))
         statuses = tuple(int(t.leg_status[leaf, i]) for i in legs)
-        return analysis.mechanism.fold_waypoints(legs, leaves.lo[leaf], leaves.hi[leaf], statuses)
+        hub, point = analysis.mechanism.fold_waypoints(
+            legs, leaves.lo[leaf], leaves.hi[leaf], statuses
+        )
+        return hub + offset, point + offset
 
-    out: list[tuple[Array, int]] = [(begin, nodes[0] % n_post)]
+    out: list[tuple[Array, int]] = [(begin + offset, nodes[0] % n_post)]
     for u, v in itertools.pairwise(nodes):
         lu, pu = divmod(u, n_post)
         lv, pv = divmod(v, n_post)
@@ -111,9 +133,10 @@ def _waypoints(
             out += [(hub, pu), (point, pu), (point, pv), (hub, pv)]
             continue
         # through the middle of the face (edge, corner) the two leaves share
-        shared = 0.5 * (
-            np.maximum(leaves.lo[lu], leaves.lo[lv]) + np.minimum(leaves.hi[lu], leaves.hi[lv])
-        )
+        lo_u, hi_u = leaves.lo[lu] + offset, leaves.hi[lu] + offset
+        offset = _touching(analysis, lo_u, hi_u, lv, offset)
+        lo_v, hi_v = leaves.lo[lv] + offset, leaves.hi[lv] + offset
+        shared = 0.5 * (np.maximum(lo_u, lo_v) + np.minimum(hi_u, hi_v))
         if here is not None:
             out.append((here[0], pu))
         out.append((shared, pu))
@@ -121,8 +144,8 @@ def _waypoints(
     here = fold(last_leaf)
     if here is not None:
         out.append((here[0], last_posture))
-    out.append((end, last_posture))
-    return out
+    out.append((end + offset, last_posture))
+    return out, offset
 
 
 def _joints(analysis: Analysis, poses: Array, posture: int) -> Array:
@@ -152,7 +175,8 @@ def plan_motion(analysis: Analysis, points: Array, step: float | None = None) ->
 
     Returns ``{"feasible": True, "region": id, "path": [{"pose", "joints",
     "posture"}, ...]}``. Raises :class:`PlanningError` when no region is known
-    to hold every pose.
+    to hold every pose. Periodic pose angles are continuous along the path: a
+    pose may be reached one or more whole turns away from the value asked.
     """
     answer = analysis.feasible(points)
     if not answer["feasible"]:
@@ -165,10 +189,11 @@ def plan_motion(analysis: Analysis, points: Array, step: float | None = None) ->
     current = _start_nodes(analysis, p[0], int(leaf[0]), component)[0]
     poses = [p[0][None, :]]
     postures = [np.array([current % analysis.table.status.shape[1]])]
+    offset = np.zeros(p.shape[1])
     for i in range(1, p.shape[0]):
         goals = _start_nodes(analysis, p[i], int(leaf[i]), component)
         route = _route(analysis, current, goals[0])
-        waypoints = _waypoints(analysis, route, p[i - 1], p[i])
+        waypoints, offset = _waypoints(analysis, route, p[i - 1], p[i], offset)
         for (a, _), (b, posture) in itertools.pairwise(waypoints):
             seg, _ = _densify(analysis, a, b, posture, step)
             poses.append(seg)
