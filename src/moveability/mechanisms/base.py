@@ -158,7 +158,9 @@ class Mechanism:
             return points
         out = np.array(points, dtype=np.float64, copy=True)
         for axis in self.periodic_axes:
-            out[:, axis] = np.mod(out[:, axis] + np.pi, 2.0 * np.pi) - np.pi
+            v = out[:, axis]
+            inside = (v >= -np.pi) & (v < np.pi)  # left as given, to the last bit
+            out[:, axis] = np.where(inside, v, np.mod(v + np.pi, 2.0 * np.pi) - np.pi)
         return out
 
     @property
