@@ -141,3 +141,28 @@ def test_posture_changes_at_the_fold():
     a, b = centres[0], centres[-1]
     motion = result.plan([a, b])
     assert motion["feasible"] is True
+
+
+def test_figures_draw_the_sliders(tmp_path):
+    """The 2-D figures serve the biglide: its legs are drawn from the slider to P."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from moveability.plot import FIGURES, figure
+
+    result = analyze(_mechanism(DESIGNS[0]), precision=0.2)
+    pose = np.array([1.0, 2.0])
+    fig = figure("postures", result, pose=pose)
+    q = result.mechanism.joint_angles(pose[None, :])[0]
+    drawn = [
+        line.get_xydata()
+        for ax in fig.axes
+        for line in ax.get_lines()
+        if len(line.get_xydata()) == 2
+    ]
+    # every posture's legs: slider at (rho_i, 0), tip at the pose
+    for posture in q:
+        for rho in posture:
+            assert any(np.allclose(d, [[rho, 0.0], pose]) for d in drawn), rho
+    for name in FIGURES:
+        figure(name, result).savefig(tmp_path / f"{name}.png", dpi=50)

@@ -183,18 +183,22 @@ def _draw_mechanism(
     alpha: float = 1.0,
     label: str | None = None,
 ) -> list[Any]:
-    """Links of a mechanism whose legs have an actuated base joint and an elbow."""
+    """Links of a mechanism: each leg's ``links`` (fixed joint, ..., platform point)."""
     artists = []
     for i, leg in enumerate(mechanism.legs):
-        base = np.asarray(leg.base)  # type: ignore[attr-defined]
-        elbow = leg.elbow(joints[i])  # type: ignore[attr-defined]
-        xs = [base[0], elbow[0], pose[0]]
-        ys = [base[1], elbow[1], pose[1]]
+        pts = leg.links(np.asarray(pose, dtype=np.float64), float(joints[i]))  # type: ignore[attr-defined]
         (line,) = ax.plot(
-            xs, ys, "-o", color=color, alpha=alpha, lw=2, ms=4, label=label if i == 0 else None
+            pts[:, 0],
+            pts[:, 1],
+            "-o",
+            color=color,
+            alpha=alpha,
+            lw=2,
+            ms=4,
+            label=label if i == 0 else None,
         )
         artists.append(line)
-        ax.plot([base[0]], [base[1]], "s", color="black", ms=6)
+        ax.plot([pts[0, 0]], [pts[0, 1]], "s", color="black", ms=6)
     ax.plot([pose[0]], [pose[1]], "o", color="black", ms=5)
     return artists
 
@@ -325,36 +329,40 @@ def plot_joint_space(result: Analysis, ax: Axes | None = None, samples: int = 4)
             alpha=0.5,
             label=f"trace of region {region.id} (det A {'>' if region.sign > 0 else '<'} 0)",
         )
-    # parallel singularities: where the circles about C and D are tangent
-    lims = m.limits
-    qs = [np.linspace(lim.lo, lim.lo + 2 * np.pi if lim.periodic else lim.hi, 400) for lim in lims]
-    g1, g2 = np.meshgrid(qs[0], qs[1], indexing="ij")
-    legs = m.legs
-    c = legs[0].elbow(g1)  # type: ignore[attr-defined]
-    d = legs[1].elbow(g2)  # type: ignore[attr-defined]
-    cd = np.hypot(*(c - d).transpose(2, 0, 1))
-    b1, b2 = legs[0].distal, legs[1].distal  # type: ignore[attr-defined]
-    for level, style in ((b1 + b2, "-"), (abs(b1 - b2), "--")):
-        if cd.min() < level < cd.max():
-            ax.contour(
-                g1, g2, cd, levels=[level], colors=["black"], linestyles=[style], linewidths=1.0
-            )
     from matplotlib.lines import Line2D
 
+    from .mechanisms import FiveBar
+
+    lims = m.limits
+    qs = [np.linspace(lim.lo, lim.lo + 2 * np.pi if lim.periodic else lim.hi, 400) for lim in lims]
     handles, _ = ax.get_legend_handles_labels()
     for h in handles:
         h.set_sizes([20])  # type: ignore[attr-defined]
-    handles += [
-        Line2D([], [], color="black", label="det A = 0: |CD| = L2 + L4"),
-        Line2D([], [], color="black", linestyle="--", label="det A = 0: |CD| = |L2 - L4|"),
-    ]
+    if isinstance(m, FiveBar):
+        # parallel singularities: where the circles about C and D are tangent
+        g1, g2 = np.meshgrid(qs[0], qs[1], indexing="ij")
+        c = m.rr_legs[0].elbow(g1)
+        d = m.rr_legs[1].elbow(g2)
+        cd = np.hypot(*(c - d).transpose(2, 0, 1))
+        b1, b2 = m.rr_legs[0].distal, m.rr_legs[1].distal
+        for level, style in ((b1 + b2, "-"), (abs(b1 - b2), "--")):
+            if cd.min() < level < cd.max():
+                ax.contour(
+                    g1, g2, cd, levels=[level], colors=["black"], linestyles=[style], linewidths=1.0
+                )
+        handles += [
+            Line2D([], [], color="black", label="det A = 0: |CD| = L2 + L4"),
+            Line2D([], [], color="black", linestyle="--", label="det A = 0: |CD| = |L2 - L4|"),
+        ]
     ax.legend(handles=handles, loc="upper right", fontsize=7)
     ax.set_xlim(qs[0][0], qs[0][-1])
     ax.set_ylim(qs[1][0], qs[1][-1])
     ax.set_aspect("equal")
-    ax.set_xlabel(f"{m.joint_names[0]} (rad)")
-    ax.set_ylabel(f"{m.joint_names[1]} (rad)")
-    ax.set_title("Joint space Q: singularity curves and region traces")
+    units = ["" if lim.prismatic else " (rad)" for lim in lims]
+    ax.set_xlabel(f"{m.joint_names[0]}{units[0]}")
+    ax.set_ylabel(f"{m.joint_names[1]}{units[1]}")
+    title = "singularity curves and region traces" if isinstance(m, FiveBar) else "region traces"
+    ax.set_title(f"Joint space Q: {title}")
     return fig
 
 

@@ -68,6 +68,10 @@ class SliderLeg:
             h = np.sqrt(h2)
         return np.stack([p[:, 0] + h, p[:, 0] - h], axis=1)
 
+    def links(self, pose: Array, position: float) -> Array:
+        """The leg drawn as a polyline: slider, platform point; shape (2, 2)."""
+        return np.array([[position, 0.0], [pose[0], pose[1]]])
+
     def constraint(self, points: Array, angles: Array) -> Array:
         p = np.asarray(points, dtype=np.float64)
         return (p[..., 0] - angles) ** 2 + p[..., 1] ** 2 - self.length**2

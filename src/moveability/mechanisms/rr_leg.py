@@ -71,6 +71,10 @@ class RRLeg:
             axis=-1,
         )
 
+    def links(self, pose: Array, angle: float) -> Array:
+        """The leg drawn as a polyline: base, elbow, platform point; shape (3, 2)."""
+        return np.stack([np.asarray(self.base), self.elbow(np.asarray(angle)), pose[:2]])
+
     def constraint(self, points: Array, angles: Array) -> Array:
         """``F(P, t) = |P - C(t)|^2 - b^2``."""
         d = np.asarray(points, dtype=np.float64) - self.elbow(angles)

@@ -63,6 +63,11 @@ class RPRLeg:
         dx, dy, _, _ = self._target(points)
         return np.hypot(dx, dy)[:, None]
 
+    def links(self, pose: Array, length: float) -> Array:
+        """The leg drawn as a polyline: base joint, platform joint; shape (2, 2)."""
+        dx, dy, _, _ = self._target(np.asarray(pose, dtype=np.float64)[None, :])
+        return np.array([list(self.base), [self.base[0] + dx[0], self.base[1] + dy[0]]])
+
     def constraint(self, points: Array, angles: Array) -> Array:
         """``F = |B - A|^2 - rho^2``."""
         dx, dy, _, _ = self._target(points)
