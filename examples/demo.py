@@ -3,7 +3,8 @@
 For each of the paper's joint-limit cases it prints the regions R_j, the areas
 of the N-connected regions W_Nj, whether the workspace W is N-connected, and
 feasibility questions with witness postures; it writes every figure and an
-HTML report for each case to ``out/<case>/``.
+HTML report for each case to ``out/<case>/``. Then the same for the biglide
+and the 3-RPR of ``examples/``.
 """
 
 from __future__ import annotations
@@ -62,7 +63,30 @@ def main() -> None:
             plt.close(fig)
         print(f"  figures and report: {write_report(result, folder)}")
         print()
+    other_mechanisms()
     sys.stdout.flush()
+
+
+def other_mechanisms() -> None:
+    """The biglide and the 3-RPR of examples/, with their figures and reports."""
+    for path, precision in (
+        (HERE / "biglide.toml", 0.02),
+        (HERE / "three-rpr.toml", (0.4, 0.4, 0.05)),
+    ):
+        print(f"== {path.stem}  ({path.name}, precision {precision})")
+        start = time.perf_counter()
+        result = analyze(load_spec(path), precision=precision)
+        print(result.summary())
+        print(f"computed in {time.perf_counter() - start:.2f} s")
+        folder = OUT / path.stem
+        folder.mkdir(parents=True, exist_ok=True)
+        if len(result.mechanism.pose_names) == 2:
+            for name in FIGURES:
+                fig = figure(name, result)
+                fig.savefig(folder / f"{name}.png", dpi=100, bbox_inches="tight")
+                plt.close(fig)
+            print(f"  report: {write_report(result, folder)}")
+        print()
 
 
 if __name__ == "__main__":
