@@ -232,3 +232,14 @@ def test_cli_plot_3d_figures(tmp_path):
         main, ["plot", SPEC, "--figure", "regions-3d", "--phi", "3", "--out", str(out)]
     )
     assert bad.exit_code == 2 and "--phi" in bad.output
+
+
+def test_report_uses_the_3d_figures(result, tmp_path):
+    from moveability.report import write_report
+
+    with open(write_report(result, tmp_path), encoding="utf-8") as handle:
+        page = handle.read()
+    assert '<figure id="slices">' in page and '<figure id="regions-3d">' in page
+    assert '<figure id="regions">' not in page and '<figure id="workspace">' not in page
+    assert page.count('src="data:image/png;base64,') == 2
+    assert "volume of W_Nj" in page
