@@ -25,20 +25,26 @@ if TYPE_CHECKING:
 
 __all__ = [
     "FIGURES",
+    "FIGURES_3D",
     "PALETTE",
     "animate_path",
     "figure",
+    "figures_for",
     "plot_joint_space",
     "plot_path",
     "plot_postures",
     "plot_regions",
     "plot_workspace",
+    "region_cells",
 ]
 
 #: Okabe-Ito colours
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000")
 UNDECIDED = "#BBBBBB"
+#: figures of mechanisms with two pose axes
 FIGURES = ("workspace", "postures", "regions", "joint-space", "path")
+#: figures of mechanisms with three pose axes (see :mod:`moveability.plot3d`)
+FIGURES_3D = ("slices", "regions-3d")
 
 Array = NDArray[np.float64]
 
@@ -250,6 +256,42 @@ def plot_postures(
 
 
 # ------------------------------------------------------------------ regions
+def region_cells(result: Analysis, index: int) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """Leaves certainly in a region, and leaves where it may extend besides.
+
+    A leaf is *certain* when one of its posture sheets is IN and belongs to the
+    region's certified component (their volumes sum to the region's inner
+    bound); it is *possible* when, not certain, one of its sheets touches the
+    region's possible component (certain and possible volumes sum to the outer
+    bound).
+
+    Parameters
+    ----------
+    result : Analysis
+    index : int
+        Position of the region in ``result.regions``.
+
+    Returns
+    -------
+    certain, possible : ndarray of bool, shape (n_leaves,)
+        Disjoint masks over ``result.tree.leaves()``.
+
+    Examples
+    --------
+    >>> from moveability import analyze
+    >>> from moveability.mechanisms import FiveBar
+    >>> result = analyze(FiveBar(7, 8, 5, 8, 5), precision=0.5)
+    >>> certain, possible = region_cells(result, 0)
+    >>> bool(abs(result.areas[certain].sum() - result.regions[0].area[0]) < 1e-9)
+    True
+    """
+    c, row, u = result._region_nodes[index]
+    g, t = result.graph, result.table
+    certain = ((g.certain == c) & (t.status == IN)).any(axis=1)
+    possible = (g.possible[row] == u).any(axis=1) & ~certain
+    return certain, possible
+
+
 def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure:
     """Each N-connected region W_Nj (one panel each) and an overlay.
 
@@ -261,16 +303,13 @@ def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure
         axes = _panels(n, 3, 5.5)
     fig = _figure_of(axes[0])
     leaves = result.tree.leaves()
-    g, t = result.graph, result.table
     overlay = axes[len(regions)]
     from matplotlib.patches import Patch
 
     overlay_handles = []
     for j, region in enumerate(regions):
         color = PALETTE[j % len(PALETTE)]
-        row = 0 if region.sign > 0 else 1
-        sure = ((g.certain == region.certain) & (t.status == IN)).any(axis=1)
-        maybe = (g.possible[row] == region.possible).any(axis=1) & ~sure
+        sure, maybe = region_cells(result, j)
         ax = axes[j]
         _cells(ax, leaves.lo[sure], leaves.hi[sure], color)
         _cells(ax, leaves.lo[maybe], leaves.hi[maybe], color, alpha=0.3)
@@ -437,12 +476,54 @@ def animate_path(result: Analysis, motion: dict[str, Any], out: str, fps: int = 
 
 
 # ------------------------------------------------------------------ figure
+def figures_for(result: Analysis) -> tuple[str, ...]:
+    """The figures that apply to an analysis: :data:`FIGURES` for two pose axes,
+    :data:`FIGURES_3D` for three.
+
+    Examples
+    --------
+    >>> from moveability import analyze
+    >>> from moveability.mechanisms import FiveBar
+    >>> figures_for(analyze(FiveBar(), precision=0.5))
+    ('workspace', 'postures', 'regions', 'joint-space', 'path')
+    """
+    return {2: FIGURES, 3: FIGURES_3D}.get(result.tree.ndim, ())
+
+
 def figure(
-    name: str, result: Analysis, *, pose: ArrayLike | None = None, points: ArrayLike | None = None
+    name: str,
+    result: Analysis,
+    *,
+    pose: ArrayLike | None = None,
+    points: ArrayLike | None = None,
+    phis: ArrayLike | None = None,
 ) -> Figure:
-    """One of :data:`FIGURES` for an analysis (``pose`` for postures, ``points`` for path)."""
+    """One of :data:`FIGURES` or :data:`FIGURES_3D` for an analysis.
+
+    ``pose`` is for postures, ``points`` for path, ``phis`` (radians) for slices.
+    Asking a figure of the other number of pose axes raises
+    :class:`~moveability.errors.InvalidParameterError` naming ``figure``.
+    """
     from .errors import InvalidParameterError
 
+    if name not in FIGURES + FIGURES_3D:
+        raise InvalidParameterError("figure", f"one of {', '.join(FIGURES + FIGURES_3D)}", name)
+    allowed = figures_for(result)
+    if name not in allowed:
+        k = result.tree.ndim
+        raise InvalidParameterError(
+            "figure",
+            f"a figure of a mechanism with {k} pose axes ({', '.join(allowed) or 'none'})",
+            name,
+        )
+    if name == "slices":
+        from .plot3d import plot_slices
+
+        return plot_slices(result, phis=phis)
+    if name == "regions-3d":
+        from .plot3d import plot_regions_3d
+
+        return plot_regions_3d(result)
     if name == "workspace":
         return plot_workspace(result)
     if name == "postures":
@@ -453,11 +534,9 @@ def figure(
         return plot_regions(result)
     if name == "joint-space":
         return plot_joint_space(result)
-    if name == "path":
-        if points is None:
-            points = _default_points(result)
-        return plot_path(result, result.plan(points))
-    raise InvalidParameterError("figure", f"one of {', '.join(FIGURES)}", name)
+    if points is None:
+        points = _default_points(result)
+    return plot_path(result, result.plan(points))
 
 
 def _default_pose(result: Analysis) -> Array:
@@ -471,10 +550,9 @@ def _default_pose(result: Analysis) -> Array:
 
 def _default_points(result: Analysis) -> Array:
     """Two far-apart poses certainly in the largest region."""
-    region = max(result.regions, key=lambda r: r.area[0])
+    index = max(range(len(result.regions)), key=lambda j: result.regions[j].area[0])
     leaves = result.tree.leaves()
-    g, t = result.graph, result.table
-    sure = np.flatnonzero(((g.certain == region.certain) & (t.status == IN)).any(axis=1))
+    sure = np.flatnonzero(region_cells(result, index)[0])
     centres = 0.5 * (leaves.lo[sure] + leaves.hi[sure])
     a = centres[np.argmin(centres[:, 0])]
     b = centres[np.argmax(centres[:, 0])]

@@ -29,6 +29,10 @@ _CAPTIONS = {
     "joint-space": "The joint space Q: parallel-singularity curves and the traces of the "
     "regions' certified configurations.",
     "path": "A planned motion inside one region, as snapshots; posture changes are marked.",
+    "slices": "Slices of the regions at four orientations (solid: certified; light: where a "
+    "region may extend; grey: undecided, in no region), with the outline of W.",
+    "regions-3d": "The certified part of each region in (x, y, phi): the outer faces of its "
+    "cells.",
 }
 
 
@@ -47,12 +51,13 @@ def _tri(value: bool | None) -> str:
 
 def write_report(result: Analysis, out_dir: str | os.PathLike[str]) -> str:
     """Write ``index.html`` into ``out_dir`` and return its path."""
-    from .plot import FIGURES, figure
+    from .plot import figure, figures_for
 
     os.makedirs(out_dir, exist_ok=True)
     data = result.to_dict()
     images = []
-    for name in FIGURES:
+    # two pose axes: the plane figures; three: slices and a 3-D view
+    for name in figures_for(result):
         try:
             images.append((name, _png(figure(name, result))))
         except MoveabilityError as error:  # e.g. no certified motion to draw

@@ -2,7 +2,7 @@
 
 One module per command (:mod:`.regions`, :mod:`.locate`, :mod:`.feasible`,
 :mod:`.plan`, :mod:`.plot`,
-:mod:`.report`),
+:mod:`.report`, :mod:`.export`),
 shared options in :mod:`.options`. Results go to stdout (a summary, or JSON
 with ``--json -``), logs to stderr. Bad input exits with status 2 and the one
 line ``Error: <message>`` on stderr.
@@ -23,6 +23,7 @@ import click
 
 from .. import __version__
 from . import options
+from .export import export_command
 from .feasible import feasible_command
 from .locate import locate_command
 from .plan import plan_command
@@ -50,3 +51,4 @@ main.add_command(feasible_command)
 main.add_command(plan_command)
 main.add_command(plot_command)
 main.add_command(report_command)
+main.add_command(export_command)

@@ -24,14 +24,31 @@ def _pose(text: str | None) -> np.ndarray | None:
     return np.array(values)
 
 
+def _check_figure(name: str, mechanism: object) -> None:
+    """Refuse, before the analysis, a figure drawn for the other number of pose axes."""
+    from ..plot import FIGURES, FIGURES_3D
+
+    axes = tuple(getattr(mechanism, "pose_names", ()))
+    fitting = {2: FIGURES, 3: FIGURES_3D}.get(len(axes), ())
+    if name not in fitting:
+        use = f"use {' or '.join(fitting)}" if fitting else "no figure applies"
+        raise options.InputError(
+            f"invalid --figure: {name!r} does not apply to a mechanism with {len(axes)} pose "
+            f"axes ({', '.join(axes)}); {use}"
+        )
+
+
 @click.command("plot")
 @options.spec_argument
 @click.option(
     "--figure",
     "name",
     required=True,
-    type=click.Choice(["workspace", "postures", "regions", "joint-space", "path"]),
-    help="Which figure.",
+    type=click.Choice(
+        ["workspace", "postures", "regions", "joint-space", "path", "slices", "regions-3d"]
+    ),
+    help="Which figure: slices and regions-3d for mechanisms with 3 pose axes (x, y, phi), "
+    "the others for 2.",
 )
 @click.option(
     "--out",
@@ -47,6 +64,15 @@ def _pose(text: str | None) -> np.ndarray | None:
     type=click.Path(dir_okay=False),
     help="CSV of poses for the path figure (default: two poses of the largest region).",
 )
+@click.option(
+    "--phi",
+    "phis",
+    multiple=True,
+    type=float,
+    metavar="DEG",
+    help="With --figure slices: an angle of the slices in degrees; repeat for several "
+    "(default -135, -45, 45, 135).",
+)
 @click.option("--animate", is_flag=True, help="With --figure path: write an animated GIF.")
 @click.option("--overwrite", is_flag=True, help="Replace --out if it exists.")
 @options.precision_option
@@ -56,6 +82,7 @@ def plot_command(
     out: str,
     pose: str | None,
     points: str | None,
+    phis: tuple[float, ...],
     animate: bool,
     overwrite: bool,
     precision: float,
@@ -71,11 +98,16 @@ def plot_command(
         )
     if animate and name != "path":
         raise options.InputError("invalid --animate: only the path figure is animated")
+    if phis and name != "slices":
+        raise options.InputError("invalid --phi: only the slices figure takes angles")
+    if not all(np.isfinite(phis)):
+        raise options.InputError(f"invalid --phi: expected finite angles, got {list(phis)!r}")
     if os.path.exists(out) and not overwrite:
         raise options.InputError(f"refusing to overwrite {out}: it exists (use --overwrite)")
     at = _pose(pose)
     with options.reporting_errors():
         mechanism = options.load_mechanism(spec)
+        _check_figure(name, mechanism)
         poses = options.read_points(points, mechanism.pose_names) if points else None
         result = options.run_analysis(mechanism, precision, options.progress_reporter())
         from ..plot import animate_path, figure
@@ -87,7 +119,8 @@ def plot_command(
                 motion = result.plan(poses if poses is not None else _default_points(result))
                 animate_path(result, motion, out)
             else:
-                fig = figure(name, result, pose=at, points=poses)
+                angles = np.radians(phis) if phis else None
+                fig = figure(name, result, pose=at, points=poses, phis=angles)
                 fig.savefig(out, dpi=110, bbox_inches="tight")
         except PlanningError as error:
             click.echo(f"Error: no motion: {error}", err=True)

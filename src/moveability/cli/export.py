@@ -1,0 +1,90 @@
+"""``moveability export``: the regions as VTK files for ParaView."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from typing import Any
+
+import click
+
+from . import options
+
+__all__ = ["export_command", "format_export"]
+
+
+def format_export(data: Mapping[str, Any]) -> str:
+    """The paths written, one a line.
+
+    Examples
+    --------
+    >>> print(format_export({"files": [{"path": "out/region-0.vtu"},
+    ...                                {"path": "out/undecided.vtu"}]}))
+    out/region-0.vtu
+    out/undecided.vtu
+    """
+    return "\n".join(str(entry["path"]) for entry in data["files"])
+
+
+@click.command("export")
+@options.spec_argument
+@click.option(
+    "--out",
+    "out",
+    required=True,
+    type=click.Path(file_okay=False),
+    help="Directory to write region-<id>.vtu and undecided.vtu into (created if missing).",
+)
+@options.precision_option
+@options.json_options
+def export_command(
+    spec: str, out: str, precision: float, json_out: str | None, overwrite: bool
+) -> None:
+    """Write the regions of the manipulator of SPEC as VTK files (.vtu) for ParaView.
+
+    One file per region: its leaves as cells, with the cell data ``certified``
+    (1: certainly in the region, 0: the region may extend there) and
+    ``leaf_level``; plus undecided.vtu, the leaves left undecided. Mechanisms
+    with 2 pose axes give quads in the plane z = 0, with 3 hexahedra. Prints
+    the paths written (a JSON list of files with --json -).
+    """
+    options.check_output(json_out, overwrite)
+    if os.path.isdir(out) and not overwrite:
+        taken = sorted(name for name in os.listdir(out) if name.endswith(".vtu"))
+        if taken:
+            raise options.InputError(
+                f"refusing to overwrite {os.path.join(out, taken[0])}: --out holds .vtu files "
+                "(use --overwrite)"
+            )
+    with options.reporting_errors():
+        mechanism = options.load_mechanism(spec)
+        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        from ..plot import region_cells
+        from ..status import BOUNDARY
+        from ..vtk import export_vtk
+
+        paths = export_vtk(result, out)
+        measure = result.measure_name
+        files: list[dict[str, Any]] = []
+        for j, region in enumerate(result.regions):
+            certain, possible = region_cells(result, j)
+            files.append(
+                {
+                    "path": str(paths[j]),
+                    "region": region.id,
+                    "cells": int((certain | possible).sum()),
+                    "certified_cells": int(certain.sum()),
+                    measure: list(region.area),
+                }
+            )
+        files.append(
+            {
+                "path": str(paths[-1]),
+                "region": None,
+                "cells": int((result.tree.status == BOUNDARY).sum()),
+                "certified_cells": 0,
+                measure: [0.0, result.undecided[f"boundary_{measure}"]],
+            }
+        )
+        data = {"precision": result.precision, "pose": list(mechanism.pose_names), "files": files}
+    options.write_output(data, json_out, overwrite, format_export)

@@ -1,0 +1,375 @@
+"""Figures of an analysis with three pose axes (x, y, phi): slices and a 3-D view.
+
+With three pose axes the regions are solids. :func:`plot_slices` cuts them at
+chosen values of the third axis and draws the (x, y) slices;
+:func:`plot_regions_3d` draws the outer surface of each region's certified
+part, found by :func:`boundary_faces`. Colours and legends follow
+:mod:`moveability.plot`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import InvalidParameterError
+from .plot import PALETTE, UNDECIDED, _cells, _figure_of, _frame, _panels, _pyplot, region_cells
+from .status import BOUNDARY, OUT
+from .topology import adjacency
+from .tree import HyperTree, _to_coordinates
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from .analysis import Analysis
+
+__all__ = ["DEFAULT_PHIS", "MAX_FACES", "boundary_faces", "plot_regions_3d", "plot_slices"]
+
+#: angles of the slices drawn by default (radians): -135, -45, 45 and 135 degrees
+DEFAULT_PHIS = tuple(float(v) for v in np.radians([-135.0, -45.0, 45.0, 135.0]))
+#: most faces drawn by :func:`plot_regions_3d` over all regions
+MAX_FACES = 20000
+
+Array = NDArray[np.float64]
+
+
+def _check_3d(result: Analysis, name: str) -> None:
+    if result.tree.ndim != 3:
+        raise InvalidParameterError(
+            "figure", "an analysis with 3 pose axes", f"{name} of {result.tree.ndim} pose axes"
+        )
+
+
+def _sign(sign: int) -> str:
+    return ">" if sign > 0 else "<"
+
+
+def _region_label(result: Analysis, index: int) -> str:
+    region = result.regions[index]
+    return (
+        f"region {region.id}: det A {_sign(region.sign)} 0, {result.measure_name} in "
+        f"[{region.area[0]:.3g}, {region.area[1]:.3g}]"
+    )
+
+
+def _angle_text(mechanism: Any, axis: int, value: float) -> str:
+    name = mechanism.pose_names[axis]
+    if axis in mechanism.periodic_axes:
+        return f"{name} = {np.degrees(value):.4g}\N{DEGREE SIGN}"
+    return f"{name} = {value:.4g}"
+
+
+# ------------------------------------------------------------------- slices
+def _wrap(result: Analysis, value: float) -> float:
+    axis = 2
+    if axis in result.mechanism.periodic_axes:
+        pose = np.zeros((1, 3))
+        pose[0, axis] = value
+        return float(result.mechanism.wrap_poses(pose)[0, axis])
+    return float(value)
+
+
+def _in_slice(lo: Array, hi: Array, value: float, top: float) -> NDArray[np.bool_]:
+    """Leaves whose third-axis range holds ``value`` (half-open, except at the top)."""
+    return (lo[:, 2] <= value) & ((value < hi[:, 2]) | ((hi[:, 2] == top) & (value == top)))
+
+
+def _outline(ax: Axes, result: Analysis, value: float) -> Any:
+    """Outline of W (certain or undecided) in a slice, from a raster twice the finest grid."""
+    from .measurement import locate
+
+    tree = result.tree
+    n = [2 << d for d in tree.max_depth[:2]]
+    xs = tree.lo[0] + (np.arange(n[0]) + 0.5) * (tree.hi[0] - tree.lo[0]) / n[0]
+    ys = tree.lo[1] + (np.arange(n[1]) + 0.5) * (tree.hi[1] - tree.lo[1]) / n[1]
+    gx, gy = np.meshgrid(xs, ys)
+    pts = np.stack([gx.ravel(), gy.ravel(), np.full(gx.size, value)], axis=1)
+    _, leaf = locate(tree, pts)
+    maybe_w = (result.table.status != OUT).any(axis=1)
+    inside = np.where(leaf >= 0, maybe_w[np.maximum(leaf, 0)], False).reshape(gx.shape)
+    if inside.any() and not inside.all():
+        return ax.contour(
+            gx, gy, inside.astype(float), levels=[0.5], colors=["black"], linewidths=0.8
+        )
+    return None
+
+
+def plot_slices(
+    result: Analysis, phis: ArrayLike | None = None, axes: Sequence[Axes] | None = None
+) -> Figure:
+    """The (x, y) slices of the regions at chosen orientations, one panel each.
+
+    Each panel draws the leaves whose third-axis range holds the angle: a
+    region's certified part solid, where it may extend light, undecided leaves
+    of no region grey, and the outline of W (certain or undecided) in black.
+
+    Parameters
+    ----------
+    result : Analysis
+        An analysis with three pose axes (x, y, phi).
+    phis : array_like, optional
+        Angles of the slices in radians (periodic angles are wrapped);
+        :data:`DEFAULT_PHIS` by default.
+    axes : sequence of Axes, optional
+        One per angle; new panels by default.
+
+    Returns
+    -------
+    Figure
+
+    Examples
+    --------
+    >>> from moveability import analyze
+    >>> result = analyze("examples/three-rpr.toml", precision=(2, 2, 0.4))
+    >>> fig = plot_slices(result, phis=[0.0, 0.5])
+    >>> [ax.get_title() for ax in fig.axes]
+    ['phi = 0\N{DEGREE SIGN}', 'phi = 28.65\N{DEGREE SIGN}']
+    """
+    _check_3d(result, "slices")
+    values = np.atleast_1d(np.asarray(DEFAULT_PHIS if phis is None else phis, dtype=np.float64))
+    if values.ndim != 1 or values.size == 0 or not np.isfinite(values).all():
+        raise InvalidParameterError("phis", "one or more finite angles (radians)", phis)
+    if axes is None:
+        axes = _panels(values.size, 2, 6.0)
+    if len(axes) < values.size:
+        raise InvalidParameterError("axes", f"at least {values.size} axes", len(axes))
+    fig = _figure_of(axes[0])
+    leaves = result.tree.leaves()
+    lo, hi = leaves.lo, leaves.hi
+    top = float(result.tree.hi[2])
+    masks = [region_cells(result, j) for j in range(len(result.regions))]
+    coloured = np.zeros(lo.shape[0], dtype=bool)
+    for certain, possible in masks:
+        coloured |= certain | possible
+    undecided = (leaves.status == BOUNDARY) & ~coloured
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    m = result.mechanism
+    for ax, asked in zip(axes, values, strict=False):
+        value = _wrap(result, float(asked))
+        cut = _in_slice(lo, hi, value, top)
+        grey = cut & undecided
+        coll = _cells(ax, lo[grey, :2], hi[grey, :2], UNDECIDED)
+        coll.set_gid("undecided")
+        for j, (certain, possible) in enumerate(masks):
+            color = PALETTE[j % len(PALETTE)]
+            rid = result.regions[j].id
+            light = cut & possible
+            coll = _cells(ax, lo[light, :2], hi[light, :2], color, alpha=0.3)
+            coll.set_gid(f"region {rid} possible")
+            solid = cut & certain
+            coll = _cells(ax, lo[solid, :2], hi[solid, :2], color)
+            coll.set_gid(f"region {rid} certain")
+        _outline(ax, result, value)
+        _frame(ax, m, _angle_text(m, 2, value))
+    for ax in axes[values.size :]:
+        ax.set_axis_off()
+    handles: list[Any] = [
+        Patch(color=PALETTE[j % len(PALETTE)], label=_region_label(result, j) + " (certified)")
+        for j in range(len(result.regions))
+    ]
+    handles += [
+        Patch(color=PALETTE[0], alpha=0.3, label="light: where a region may extend"),
+        Patch(color=UNDECIDED, label="undecided, in no region"),
+        Line2D([], [], color="black", lw=0.8, label="outline of W (certain or undecided)"),
+    ]
+    # below the panels: saved with bbox_inches="tight"
+    fig.legend(handles=handles, loc="upper center", ncol=2, fontsize=8, bbox_to_anchor=(0.5, 0.02))
+    fig.suptitle(
+        f"Slices of the N-connected regions (precision {result.precision_text}); "
+        f"{result.measure_name}s of the whole regions"
+    )
+    return fig
+
+
+# --------------------------------------------------------------- 3-D view
+def boundary_faces(
+    tree: HyperTree, chosen: ArrayLike
+) -> tuple[Array, Array, NDArray[np.intp], NDArray[np.int8]]:
+    """Faces of the outer surface of the union of the chosen leaves.
+
+    Each face is a piece of a chosen leaf's face where the leaf meets an
+    unchosen leaf (across periodic axes too) or the border of the box; faces
+    between two chosen leaves are left out. Where a large chosen leaf meets
+    several smaller leaves, only the pieces against unchosen ones are kept,
+    so the faces tile the surface exactly.
+
+    Parameters
+    ----------
+    tree : HyperTree
+    chosen : array_like of bool
+        Mask over the leaves.
+
+    Returns
+    -------
+    lo, hi : ndarray of float64, shape (m, k)
+        Corners of the faces; ``lo[:, axis] == hi[:, axis]`` on the normal axis.
+    axis : ndarray of intp, shape (m,)
+        Normal axis of each face.
+    side : ndarray of int8, shape (m,)
+        +1 where the chosen leaf lies below the face along ``axis``, -1 above.
+
+    Notes
+    -----
+    ``O(n k log n)`` for ``n`` leaves: one face-adjacency probe of the tree
+    (:func:`moveability.topology.adjacency`), then numpy on the pairs.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability import HyperTree
+    >>> tree = HyperTree.from_array(np.ones((2, 2, 2), dtype=bool), merge=False)
+    >>> lo, hi, axis, side = boundary_faces(tree, [True, True] + [False] * 6)
+    >>> len(axis)  # two unit cubes side by side: 10 outer faces
+    10
+    """
+    mask = np.asarray(chosen, dtype=bool).ravel()
+    if mask.size != len(tree):
+        raise InvalidParameterError("chosen", f"a mask of {len(tree)} leaves", mask.size)
+    k = tree.ndim
+    anchors = tree.anchors
+    ends = anchors + tree.layout.cell_sizes(tree.levels)
+    res = np.left_shift(np.int64(1), np.asarray(tree.max_depth, dtype=np.int64))
+    pairs = adjacency(tree, connectivity=1)
+    pairs = pairs[mask[pairs[:, 0]] != mask[pairs[:, 1]]]
+    s = np.where(mask[pairs[:, 0]], pairs[:, 0], pairs[:, 1])
+    o = np.where(mask[pairs[:, 0]], pairs[:, 1], pairs[:, 0])
+    lo_parts: list[NDArray[np.int64]] = []
+    hi_parts: list[NDArray[np.int64]] = []
+    axis_parts: list[NDArray[np.intp]] = []
+    side_parts: list[NDArray[np.int8]] = []
+    overlap_lo = np.maximum(anchors[s], anchors[o])
+    overlap_hi = np.minimum(ends[s], ends[o])
+    inner = np.flatnonzero(mask)
+    for a in range(k):
+        wrap = a in tree.periodic
+        others = np.ones(s.size, dtype=bool)
+        for b in range(k):
+            if b != a:
+                others &= overlap_hi[:, b] > overlap_lo[:, b]
+        top_s = ends[s, a] % res[a] if wrap else ends[s, a]
+        top_o = ends[o, a] % res[a] if wrap else ends[o, a]
+        for side, touch, plane in (
+            (1, top_s == anchors[o, a], ends[s, a]),
+            (-1, top_o == anchors[s, a], anchors[s, a]),
+        ):
+            sel = touch & others
+            f_lo, f_hi = overlap_lo[sel].copy(), overlap_hi[sel].copy()
+            f_lo[:, a] = f_hi[:, a] = plane[sel]
+            lo_parts.append(f_lo)
+            hi_parts.append(f_hi)
+            axis_parts.append(np.full(f_lo.shape[0], a, dtype=np.intp))
+            side_parts.append(np.full(f_lo.shape[0], side, dtype=np.int8))
+        if wrap:
+            continue
+        # the border of the box
+        for side, at, plane in (
+            (1, ends[inner, a] == res[a], ends[inner, a]),
+            (-1, anchors[inner, a] == 0, anchors[inner, a]),
+        ):
+            f_lo, f_hi = anchors[inner][at].copy(), ends[inner][at].copy()
+            f_lo[:, a] = f_hi[:, a] = plane[at]
+            lo_parts.append(f_lo)
+            hi_parts.append(f_hi)
+            axis_parts.append(np.full(f_lo.shape[0], a, dtype=np.intp))
+            side_parts.append(np.full(f_lo.shape[0], side, dtype=np.int8))
+    ints_lo = np.concatenate(lo_parts) if lo_parts else np.zeros((0, k), dtype=np.int64)
+    ints_hi = np.concatenate(hi_parts) if hi_parts else np.zeros((0, k), dtype=np.int64)
+    return (
+        _to_coordinates(tree.lo, tree.hi, tree.layout, ints_lo),
+        _to_coordinates(tree.lo, tree.hi, tree.layout, ints_hi),
+        np.concatenate(axis_parts) if axis_parts else np.zeros(0, dtype=np.intp),
+        np.concatenate(side_parts) if side_parts else np.zeros(0, dtype=np.int8),
+    )
+
+
+def _quads(lo: Array, hi: Array, axis: NDArray[np.intp]) -> Array:
+    """The four corners (m, 4, 3) of axis-aligned faces of a 3-D box grid."""
+    u = np.array([1, 0, 0])[axis]  # first in-plane axis: 1 when the normal is x, else 0
+    v = np.array([2, 2, 1])[axis]
+    rows = np.arange(lo.shape[0])
+    quads = np.repeat(lo[:, None, :], 4, axis=1)
+    quads[rows, 1, u] = hi[rows, u]
+    quads[rows, 2, u] = hi[rows, u]
+    quads[rows, 2, v] = hi[rows, v]
+    quads[rows, 3, v] = hi[rows, v]
+    return quads
+
+
+def plot_regions_3d(result: Analysis, ax: Axes | None = None, max_faces: int = MAX_FACES) -> Figure:
+    """A 3-D view of the certified part of each region: the outer surface of its leaves.
+
+    Parameters
+    ----------
+    result : Analysis
+        An analysis with three pose axes.
+    ax : Axes, optional
+        3-D axes (``projection="3d"``); new ones by default.
+    max_faces : int
+        At most this many faces are drawn over all regions: above it, each
+        region keeps its largest faces in proportion, and the title says so.
+
+    Returns
+    -------
+    Figure
+
+    Examples
+    --------
+    >>> from moveability import analyze
+    >>> result = analyze("examples/three-rpr.toml", precision=(2, 2, 0.4))
+    >>> fig = plot_regions_3d(result)
+    >>> fig.axes[0].get_zlabel()
+    'phi (rad)'
+    """
+    _check_3d(result, "regions-3d")
+    if isinstance(max_faces, bool) or not isinstance(max_faces, int) or max_faces < 1:
+        raise InvalidParameterError("max_faces", "a positive int", max_faces)
+    from matplotlib.patches import Patch
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    # 3-D axes: their z methods are not in the Axes annotations
+    view: Any = ax
+    if view is None:
+        view = _pyplot().figure(figsize=(8, 7)).add_subplot(projection="3d")
+    fig = _figure_of(view)
+    faces = []
+    for j in range(len(result.regions)):
+        lo, hi, axis, _ = boundary_faces(result.tree, region_cells(result, j)[0])
+        faces.append(_quads(lo, hi, axis))
+    total = sum(f.shape[0] for f in faces)
+    handles = []
+    shown = 0
+    for j, quads in enumerate(faces):
+        if total > max_faces:
+            keep = max_faces * quads.shape[0] // total
+            size = np.linalg.norm(quads[:, 2] - quads[:, 0], axis=1)
+            quads = quads[np.sort(np.argsort(-size, kind="stable")[:keep])]
+        shown += quads.shape[0]
+        color = PALETTE[j % len(PALETTE)]
+        coll = Poly3DCollection(
+            list(quads), facecolors=color, edgecolors="#333333", linewidths=0.1, alpha=0.35
+        )
+        coll.set_gid(f"region {result.regions[j].id}")
+        view.add_collection3d(coll)
+        handles.append(Patch(color=color, alpha=0.6, label=_region_label(result, j)))
+    m = result.mechanism
+    lo_box, hi_box = m.bounds
+    view.set_xlim(lo_box[0], hi_box[0])
+    view.set_ylim(lo_box[1], hi_box[1])
+    view.set_zlim(lo_box[2], hi_box[2])
+    names = m.pose_names
+    view.set_xlabel(f"{names[0]} (length units)")
+    view.set_ylabel(f"{names[1]} (length units)")
+    unit = "rad" if 2 in m.periodic_axes else "length units"
+    view.set_zlabel(f"{names[2]} ({unit})")
+    view.legend(handles=handles, loc="upper left", fontsize=7)
+    title = f"Certified part of each region (precision {result.precision_text})"
+    if shown < total:
+        title += f"\nlargest {shown} of {total} faces shown"
+    view.set_title(title)
+    return fig
