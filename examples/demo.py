@@ -20,8 +20,9 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 
 from moveability import analyze, load_spec
-from moveability.plot import FIGURES, figure
+from moveability.plot import FIGURES, figure, figures_for
 from moveability.report import write_report
+from moveability.vtk import export_vtk
 
 HERE = Path(__file__).parent
 OUT = HERE.parent / "out"
@@ -80,12 +81,14 @@ def other_mechanisms() -> None:
         print(f"computed in {time.perf_counter() - start:.2f} s")
         folder = OUT / path.stem
         folder.mkdir(parents=True, exist_ok=True)
-        if len(result.mechanism.pose_names) == 2:
-            for name in FIGURES:
-                fig = figure(name, result)
-                fig.savefig(folder / f"{name}.png", dpi=100, bbox_inches="tight")
-                plt.close(fig)
-            print(f"  report: {write_report(result, folder)}")
+        for name in figures_for(result):
+            fig = figure(name, result)
+            fig.savefig(folder / f"{name}.png", dpi=100, bbox_inches="tight")
+            plt.close(fig)
+        print(f"  figures and report: {write_report(result, folder)}")
+        if len(result.mechanism.pose_names) == 3:
+            files = export_vtk(result, folder / "vtk")
+            print(f"  VTK files for ParaView: {len(files)} in {folder / 'vtk'}")
         print()
 
 
