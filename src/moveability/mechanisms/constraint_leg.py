@@ -594,6 +594,10 @@ class ConstraintLeg:
             (f_start.hi < 0) & (f_end.hi < 0),
         )
         ok = (s2 != 0) & ends
+        # the witnesses below only for the boxes passing so far
+        keep_p = ok[p_local]
+        p_box, p_local, q = p_box[keep_p], p_local[keep_p], q[keep_p]
+        n_p = np.bincount(p_local, minlength=n_b)
         s2p = s2[p_local]
         q_mid = Interval(q.mid)
 
@@ -605,15 +609,30 @@ class ConstraintLeg:
             return Interval(np.where(s2p > 0, v.lo, -v.hi), np.where(s2p > 0, v.hi, -v.lo))
 
         # a corner certainly reachable (G < 0 at some piece's middle) and one certainly not
-        reachable = np.zeros(n_b, dtype=bool)
-        unreachable = np.zeros(n_b, dtype=bool)
-        for corner in range(1 << k):
+        # (G > 0 on every piece): candidates chosen in floats, then certified
+        n_corners = 1 << k
+        g_min = np.full((n_corners, n_b), np.inf)
+        g_low = np.full((n_corners, n_b), np.inf)
+        for corner in range(n_corners):
             pick = np.array([(corner >> j) & 1 for j in range(k)], dtype=bool)
             point = np.where(pick, hi[p_box], lo[p_box])
-            g_mid = g_at(point, point, q_mid)
-            reachable |= np.bincount(p_local, weights=g_mid.hi < 0, minlength=n_b) > 0
-            g_all = g_at(point, point, q)
-            unreachable |= np.bincount(p_local, weights=g_all.lo > 0, minlength=n_b) == n_p
+            with _quiet():
+                vals = [s2p * self.constraint(point, v) for v in (q.lo, q.mid, q.hi)]
+            np.minimum.at(g_min[corner], p_local, vals[1])
+            np.minimum.at(g_low[corner], p_local, np.minimum(np.minimum(vals[0], vals[1]), vals[2]))
+        g_min = np.where(np.isnan(g_min), np.inf, g_min)
+        g_low = np.where(np.isnan(g_low), -np.inf, g_low)
+        best_in = np.argmin(g_min, axis=0)
+        best_out = np.argmax(g_low, axis=0)
+        bits = (1 << np.arange(k))[None, :]
+        pick_in = ((best_in[p_local][:, None] & bits) > 0)
+        pick_out = ((best_out[p_local][:, None] & bits) > 0)
+        point_in = np.where(pick_in, hi[p_box], lo[p_box])
+        point_out = np.where(pick_out, hi[p_box], lo[p_box])
+        g_mid = g_at(point_in, point_in, q_mid)
+        reachable = np.bincount(p_local, weights=g_mid.hi < 0, minlength=n_b) > 0
+        g_all = g_at(point_out, point_out, q)
+        unreachable = np.bincount(p_local, weights=g_all.lo > 0, minlength=n_b) == n_p
         ok &= reachable & unreachable
         # connectivity: an axis along which G is monotone, and its low face reachable
         connected = np.zeros(n_b, dtype=bool)
