@@ -268,7 +268,7 @@ class ConstraintLeg:
             # a branch enclosed beyond the widened stroke has no root there
             beyond = (out < self._range[0]) | (out > self._range[1])
             out[beyond] = np.nan
-        rest = np.flatnonzero(~regular & (reach.status != REACH_OUT))
+        rest = np.flatnonzero(~regular & (clip | (reach.status != REACH_OUT)))
         if rest.size:
             out[rest] = self._sampled(p[rest], clip)
         return out
@@ -689,7 +689,7 @@ class ConstraintLeg:
             """min over Q of G = s2 F at poses (G convex on Q)."""
             a = np.full(points.shape[0], q_lo)
             b = np.full(points.shape[0], q_hi)
-            for _ in range(100):
+            for _ in range(60):
                 mid = 0.5 * (a + b)
                 rising = s2 * self.serial_term(points, mid) > 0
                 a = np.where(rising, a, mid)
@@ -703,7 +703,7 @@ class ConstraintLeg:
         t_in, t_out = 0.0, 1.0
         if m(far[None, :])[0] <= 0:
             t_in = 1.0
-        for _ in range(100):
+        for _ in range(55):
             if t_in == 1.0:
                 break
             t = 0.5 * (t_in + t_out)
