@@ -52,8 +52,10 @@ DESIGNS = [
 def pair(request):
     lengths, limits = DESIGNS[request.param]
     custom = CustomMechanism(five_bar_spec(lengths, limits))
-    lim = tuple(JointLimit(*(np.pi if v == "pi" else -np.pi if v == "-pi" else v for v in limits))
-                for _ in range(2))
+    lim = tuple(
+        JointLimit(*(np.pi if v == "pi" else -np.pi if v == "-pi" else v for v in limits))
+        for _ in range(2)
+    )
     builtin = FiveBar(*lengths, limits=lim)
     return analyze(custom, PRECISION), analyze(builtin, PRECISION)
 
@@ -193,7 +195,11 @@ def _with(path, value):
     ("path", "value", "message"),
     [
         (("legs", 1, "constraint"), "(x - L0 - L3*cos(t2)**2", r"legs\[1\]\.constraint"),
-        (("legs", 0, "constraint"), "(x - z*cos(t1))**2 - L2**2", r"unknown symbol 'z' in legs\[0\]"),
+        (
+            ("legs", 0, "constraint"),
+            "(x - z*cos(t1))**2 - L2**2",
+            r"unknown symbol 'z' in legs\[0\]",
+        ),
         (("legs", 0, "constraint"), "x ^ 2 + t1", r"legs\[0\]\.constraint.*\*\*"),
         (("legs", 0, "constraint"), "__import__('os').getcwd()", r"legs\[0\]\.constraint"),
         (("legs", 0, "constraint"), "x.real + t1", r"legs\[0\]\.constraint"),

@@ -158,7 +158,8 @@ class ConstraintLeg:
     ...     d2f_dq2=lambda x, y, t: 16 * (x * cos(t) + y * sin(t)),
     ...     df_dx=(lambda x, y, t: 2 * (x - 8 * cos(t)), lambda x, y, t: 2 * (y - 8 * sin(t))),
     ... )
-    >>> reach = leg.reach(np.array([[10.0, 3.0], [20.0, 0.0]]), np.array([[10.1, 3.1], [21.0, 1.0]]))
+    >>> lo, hi = np.array([[10.0, 3.0], [20.0, 0.0]]), np.array([[10.1, 3.1], [21.0, 1.0]])
+    >>> reach = leg.reach(lo, hi)
     >>> reach.status.tolist()  # REGULAR, REACH_OUT
     [1, 0]
     >>> q = leg.angles(np.array([[10.0, 3.0]]))
@@ -359,9 +360,9 @@ class ConstraintLeg:
             fv = fv[keep]
             finite = np.isfinite(fv.lo) & np.isfinite(fv.hi)
             dv = self._box_eval(self.df_dq, lo, hi, box, Interval(qlo, qhi))
-            mono = np.where(
-                finite & (dv.lo > 0), 1, np.where(finite & (dv.hi < 0), -1, 0)
-            ).astype(np.int8)
+            mono = np.where(finite & (dv.lo > 0), 1, np.where(finite & (dv.hi < 0), -1, 0)).astype(
+                np.int8
+            )
             total = counts + np.bincount(box, minlength=n)
             split = (mono == 0) & (total[box] <= self.max_pieces) & (level < self.depth)
             final = ~split
@@ -479,7 +480,9 @@ class ConstraintLeg:
         f_start = self._box_eval(self.f, lo, hi, runs.box, Interval(runs.start))
         f_end = self._box_eval(self.f, lo, hi, runs.box, runs.end)
         cert = (runs.mono != 0) & runs.finite
-        cert &= np.where(s > 0, (f_start.hi < 0) & (f_end.lo > 0), (f_start.lo > 0) & (f_end.hi < 0))
+        cert &= np.where(
+            s > 0, (f_start.hi < 0) & (f_end.lo > 0), (f_start.lo > 0) & (f_end.hi < 0)
+        )
         n_pos = np.bincount(runs.box[cert & (s > 0)], minlength=n)
         n_neg = np.bincount(runs.box[cert & (s < 0)], minlength=n)
         n_cert = n_pos + n_neg
@@ -625,8 +628,8 @@ class ConstraintLeg:
         best_in = np.argmin(g_min, axis=0)
         best_out = np.argmax(g_low, axis=0)
         bits = (1 << np.arange(k))[None, :]
-        pick_in = ((best_in[p_local][:, None] & bits) > 0)
-        pick_out = ((best_out[p_local][:, None] & bits) > 0)
+        pick_in = (best_in[p_local][:, None] & bits) > 0
+        pick_out = (best_out[p_local][:, None] & bits) > 0
         point_in = np.where(pick_in, hi[p_box], lo[p_box])
         point_out = np.where(pick_out, hi[p_box], lo[p_box])
         g_mid = g_at(point_in, point_in, q_mid)

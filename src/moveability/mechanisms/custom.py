@@ -132,7 +132,9 @@ def _parse(text: object, key: str, names: Mapping[str, sympy.Symbol]) -> sympy.E
                 return names[node.id]
             if node.id == "pi":
                 return sympy.pi
-            raise SpecError(key, _EXPRESSION_ALLOWED, _Plain(f"unknown symbol {node.id!r} in {key}"))
+            raise SpecError(
+                key, _EXPRESSION_ALLOWED, _Plain(f"unknown symbol {node.id!r} in {key}")
+            )
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
             operand = build(node.operand)
             return -operand if isinstance(node.op, ast.USub) else operand
@@ -163,7 +165,7 @@ def _parse(text: object, key: str, names: Mapping[str, sympy.Symbol]) -> sympy.E
                     f"{func} with {_ARITY.get(func, 1)} argument(s)",
                     _Plain(ast.unparse(node)),
                 )
-            return _FUNCTIONS[func](*(build(a) for a in node.args))  # type: ignore[no-any-return]
+            return _FUNCTIONS[func](*(build(a) for a in node.args))
         raise SpecError(
             key, _EXPRESSION_ALLOWED, _Plain(f"unsupported {ast.unparse(node)!r} in {key}")
         )
@@ -431,7 +433,7 @@ got unknown symbol 'z' in legs[0].constraint
         kind = leg.get("kind", "revolute")
         if kind not in _KINDS:
             raise SpecError(f"{key}.kind", "'revolute' or 'prismatic'", kind)
-        entry: dict[str, Any] = {"joint": joint, "constraint": text.strip(), "kind": kind}
+        entry: dict[str, Any] = {"joint": joint, "constraint": str(text).strip(), "kind": kind}
         if "branches" in leg:
             branches = leg["branches"]
             if isinstance(branches, str) or not isinstance(branches, Sequence) or not branches:
@@ -539,7 +541,9 @@ class CustomMechanism(Mechanism):
             f = _parse(leg["constraint"], key, {**symbols, q.name: q})
             args = [*pose_syms, q, *param_syms]
 
-            def bind(expr: sympy.Expr, what: str) -> Callable[..., Any]:
+            def bind(
+                expr: sympy.Expr, what: str, args: list[sympy.Symbol] = args
+            ) -> Callable[..., Any]:
                 g = compile_expression(expr, args, what)
                 return lambda *xs: g(*xs, *values)
 
@@ -554,8 +558,12 @@ class CustomMechanism(Mechanism):
                 def closed_form(points: Array, fns: Any = fns) -> Array:
                     cols = [points[:, j] for j in range(points.shape[1])]
                     return np.stack(
-                        [np.broadcast_to(np.asarray(g(*cols, *values), dtype=np.float64),
-                                         (points.shape[0],)) for g in fns],
+                        [
+                            np.broadcast_to(
+                                np.asarray(g(*cols, *values), dtype=np.float64), (points.shape[0],)
+                            )
+                            for g in fns
+                        ],
                         axis=1,
                     )
 
