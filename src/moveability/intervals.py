@@ -366,7 +366,9 @@ def tan(x: IntervalLike) -> Interval:
     x = as_interval(x)
     with np.errstate(over="ignore", invalid="ignore"):
         wide = (x.hi - x.lo) >= np.pi
-    pole = wide | _contains_point(x, 0.5 * np.pi) | ~np.isfinite(x.lo) | ~np.isfinite(x.hi)
+    # poles at pi/2 + k pi
+    pole = wide | _contains_point(x, 0.5 * np.pi) | _contains_point(x, -0.5 * np.pi)
+    pole |= ~np.isfinite(x.lo) | ~np.isfinite(x.hi)
     with np.errstate(invalid="ignore"):
         lo = _down(np.tan(x.lo), _LIB_ULPS)
         hi = _up(np.tan(x.hi), _LIB_ULPS)
