@@ -28,13 +28,19 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "Interval",
+    "absolute",
     "arccos",
     "arctan2",
     "cos",
+    "exp",
     "hull",
+    "log",
+    "power",
+    "rational",
     "sin",
     "sqrt",
     "square",
+    "tan",
 ]
 
 Array = NDArray[np.float64]
@@ -147,6 +153,15 @@ class Interval:
             inv_hi = np.where(straddles, _INF, _up(1.0 / o.lo))
         return self * Interval(inv_lo, inv_hi)
 
+    def __rtruediv__(self, other: IntervalLike) -> Interval:
+        return as_interval(other) / self
+
+    def __pow__(self, n: int) -> Interval:
+        """``x ** n`` for an integer ``n`` (see :func:`power`)."""
+        if isinstance(n, bool) or not isinstance(n, int | np.integer):
+            return NotImplemented
+        return power(self, int(n))
+
 
 IntervalLike = Interval | ArrayLike
 
@@ -255,3 +270,140 @@ def arctan2(y: IntervalLike, x: IntervalLike) -> Interval:
     lo = np.maximum(np.where(cut, -_PI_UP, lo), -_PI_UP)
     hi = np.minimum(np.where(cut, _PI_UP, hi), _PI_UP)
     return Interval(lo, hi)
+
+
+# ------------------------------------------------------------------------------
+# Further functions, for constraints written as expressions (see
+# moveability.mechanisms.expressions). Each returns an enclosure of the exact
+# range; where the function is undefined or unbounded on part of an interval
+# the result is infinite on that side.
+
+
+def power(x: IntervalLike, n: int) -> Interval:
+    """``x ** n`` for an integer ``n`` (``1 / x ** -n`` when ``n < 0``).
+
+    The float power is widened by ``|n| + 4`` ulps (each of its at most ``|n|``
+    roundings is below one ulp).
+
+    Examples
+    --------
+    >>> r = power(Interval([-2.0], [1.0]), 3)
+    >>> bool(r.lo[0] <= -8.0 and 1.0 <= r.hi[0])
+    True
+    >>> power(Interval([-2.0], [1.0]), 2).lo.tolist()
+    [0.0]
+    """
+    x = as_interval(x)
+    n = int(n)
+    if n == 0:
+        return Interval(np.ones_like(x.lo))
+    if n < 0:
+        return as_interval(1.0) / power(x, -n)
+    if n == 1:
+        return x
+    if n == 2:
+        return square(x)
+    ulps = n + 4
+    with np.errstate(over="ignore"):
+        if n % 2:
+            # odd powers are increasing
+            lo = _down(np.power(x.lo, n), ulps)
+            hi = _up(np.power(x.hi, n), ulps)
+            return Interval(lo, hi)
+        a, b = np.abs(x.lo), np.abs(x.hi)
+        small, large = np.minimum(a, b), np.maximum(a, b)
+        straddles = (x.lo <= 0) & (x.hi >= 0)
+        lo = np.where(straddles, 0.0, _down(np.power(small, n), ulps))
+        hi = _up(np.power(large, n), ulps)
+    return Interval(np.maximum(lo, 0.0), hi)
+
+
+def exp(x: IntervalLike) -> Interval:
+    """Exponential (increasing).
+
+    Examples
+    --------
+    >>> r = exp(Interval([0.0], [1.0]))
+    >>> bool(r.lo[0] <= 1.0 and 2.718281828459045 <= r.hi[0])
+    True
+    """
+    x = as_interval(x)
+    with np.errstate(over="ignore"):
+        lo = np.maximum(_down(np.exp(x.lo), _LIB_ULPS), 0.0)
+        hi = _up(np.exp(x.hi), _LIB_ULPS)
+    return Interval(lo, hi)
+
+
+def log(x: IntervalLike) -> Interval:
+    """Natural logarithm of the positive part of each interval (increasing).
+
+    ``-inf`` as the lower bound where the interval reaches 0 or below; ``nan``
+    bounds where it holds no positive number.
+
+    Examples
+    --------
+    >>> r = log(Interval([1.0], [np.e]))
+    >>> bool(r.lo[0] <= 0.0 and 1.0 <= r.hi[0])
+    True
+    """
+    x = as_interval(x)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lo = np.where(x.lo <= 0, -_INF, _down(np.log(np.maximum(x.lo, 0.0)), _LIB_ULPS))
+        hi = np.where(x.hi <= 0, np.nan, _up(np.log(np.maximum(x.hi, 0.0)), _LIB_ULPS))
+    lo = np.where(x.hi <= 0, np.nan, lo)
+    return Interval(lo, hi)
+
+
+def tan(x: IntervalLike) -> Interval:
+    """Tangent; the whole real line where the interval may hold a pole.
+
+    Examples
+    --------
+    >>> r = tan(Interval([0.0, 1.0], [0.5, 2.0]))
+    >>> bool(r.lo[0] <= 0.0 and 0.5463 <= r.hi[0]), float(r.hi[1])
+    (True, inf)
+    """
+    x = as_interval(x)
+    with np.errstate(over="ignore", invalid="ignore"):
+        wide = (x.hi - x.lo) >= np.pi
+    # poles at pi/2 + k pi
+    pole = wide | _contains_point(x, 0.5 * np.pi) | _contains_point(x, -0.5 * np.pi)
+    pole |= ~np.isfinite(x.lo) | ~np.isfinite(x.hi)
+    with np.errstate(invalid="ignore"):
+        lo = _down(np.tan(x.lo), _LIB_ULPS)
+        hi = _up(np.tan(x.hi), _LIB_ULPS)
+    return Interval(np.where(pole, -_INF, lo), np.where(pole, _INF, hi))
+
+
+def absolute(x: IntervalLike) -> Interval:
+    """``|x|`` (exact: no rounding).
+
+    Examples
+    --------
+    >>> absolute(Interval([-2.0, 1.0], [1.0, 3.0])).lo.tolist()
+    [0.0, 1.0]
+    """
+    x = as_interval(x)
+    a, b = np.abs(x.lo), np.abs(x.hi)
+    straddles = (x.lo <= 0) & (x.hi >= 0)
+    return Interval(np.where(straddles, 0.0, np.minimum(a, b)), np.maximum(a, b))
+
+
+def rational(p: int, q: int) -> Interval:
+    """The tightest interval of floats holding the rational number ``p / q``.
+
+    Examples
+    --------
+    >>> third = rational(1, 3)
+    >>> bool(third.lo < third.hi and third.lo <= 1 / 3 <= third.hi)
+    True
+    >>> rational(1, 4).lo.tolist(), rational(1, 4).hi.tolist()
+    (0.25, 0.25)
+    """
+    from fractions import Fraction
+
+    exact = Fraction(int(p), int(q))
+    near = float(exact)
+    lo = near if Fraction(near) <= exact else float(np.nextafter(near, -_INF))
+    hi = near if Fraction(near) >= exact else float(np.nextafter(near, _INF))
+    return Interval(np.float64(lo), np.float64(hi))

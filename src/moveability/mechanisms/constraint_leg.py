@@ -1,0 +1,744 @@
+"""A leg given by its constraint ``F(X, q) = 0``: certified branches by root isolation.
+
+A :class:`ConstraintLeg` has one actuated joint ``q`` and a scalar constraint
+``F(X, q)`` between the pose ``X`` (k coordinates) and ``q``; it needs ``F``,
+``dF/dq``, ``d2F/dq2`` and ``dF/dX_j`` as functions that evaluate both on
+float arrays and on :class:`~moveability.intervals.Interval` (written with
+:mod:`moveability.mechanisms.expressions`). Over intervals they must be
+*guarded*: a finite enclosure certifies that the function is defined and
+continuous there.
+
+Branches
+--------
+Branch 0 is the root where the serial term ``dF/dq`` is positive, branch 1
+where it is negative. Over a box of poses the roots in ``q`` are isolated:
+the joint's search range (the full circle of a revolute joint, the stroke
+widened by a quarter of its length on both sides for a prismatic one) is cut
+into pieces; pieces where the enclosure of ``F`` excludes 0 are dropped, and
+pieces where ``dF/dq`` has no definite sign are bisected (to a depth). The
+remaining pieces form *runs* of adjacent pieces (on the circle for a revolute
+joint). A run is certified to hold exactly one root for every pose of the box
+when ``F`` is finite and ``dF/dq`` has one definite sign on every piece, and
+``F`` has definite opposite signs at the run's two ends (by continuity and
+monotonicity). Then each root's enclosure is contracted by bisection on
+``F``'s sign at points of the run. Over the box the leg is
+
+``REGULAR``
+    two runs, one certified root of each sign: every pose has exactly these
+    two configurations in the search range;
+``REACH_OUT``
+    no piece can hold a root;
+``FOLD_OUTER`` (``FOLD_INNER``)
+    one run ``Q``; ``F`` is convex (concave) in ``q`` over box x ``Q`` and
+    positive (negative) at both ends of ``Q``, so every pose has two roots in
+    ``Q``, a double root, or none; one pose of the box (a corner) certainly has
+    two and another certainly none. ``hull`` is ``Q``. The fold lies at a
+    minimum of ``F`` in ``q`` for ``FOLD_OUTER``, at a maximum for ``FOLD_INNER``;
+``REACH_UNKNOWN``
+    anything else, including more than two roots in the range (the analysis
+    then leaves the box undecided). ``hull`` is the run where there is one,
+    else infinite.
+
+A prismatic joint's roots outside the widened stroke are never valid
+configurations and are not sought. Where one branch has no root in the
+widened stroke over the whole box, it is given an enclosure beyond the
+stroke (so the joint limit classifies it out) and the leg counts as REGULAR.
+
+Fold connectivity
+-----------------
+``fold_connected`` is certified on a fold box B with run Q when, with
+``G = F`` for a convex fold and ``G = -F`` for a concave one, some pose axis
+``j`` has ``dG/dX_j`` of a definite sign on B x Q (say > 0), and the face of
+B at the low end of axis ``j`` is certainly reachable (``G(face, q*) < 0``
+for one point ``q*`` of Q). Proof: outside Q the pieces exclude roots and
+``G > 0`` at Q's ends, so ``G > 0`` off Q and the reachable poses of B are
+``{X : m(X) <= 0}`` with ``m(X) = min_Q G(X, .)``. Since ``G`` increases with
+``X_j`` at every ``q`` of Q, so does ``m``: the reachable set is a union of
+segments along axis ``j`` starting on the reachable face, hence
+path-connected (the face is convex). The two roots in Q are continuous on
+that set (``G`` strictly convex) and meet where ``m = 0``; a pose certified
+unreachable exists in B, so the segment through it ends at such a fold pose.
+Every configuration thus joins the fold by moving along axis ``j`` and the
+two branches' configurations over B form one connected set.
+:meth:`ConstraintLeg.fold_path` returns that motion.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..intervals import Interval
+from .base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, LegReach
+
+__all__ = ["ConstraintLeg"]
+
+Array = NDArray[np.float64]
+#: ``f(x_1, ..., x_k, q)`` on arrays or Intervals
+Function = Callable[..., Any]
+
+_TWO_PI = Interval(np.nextafter(2 * np.pi, 0.0), np.nextafter(2 * np.pi, np.inf))
+_INF = np.inf
+
+
+def _quiet() -> Any:
+    return np.errstate(all="ignore")
+
+
+@dataclass
+class _Pieces:
+    """Candidate pieces of the search range: struct of arrays, sorted by (box, q)."""
+
+    box: NDArray[np.intp]
+    lo: Array
+    hi: Array
+    mono: NDArray[np.int8]  # sign of dF/dq certified on the piece, 0 if none
+    finite: NDArray[np.bool_]  # F finite (defined, continuous) on box x piece
+
+    def take(self, keep: Any) -> _Pieces:
+        return _Pieces(
+            self.box[keep], self.lo[keep], self.hi[keep], self.mono[keep], self.finite[keep]
+        )
+
+
+@dataclass
+class _Runs:
+    """Runs of adjacent pieces, per box."""
+
+    pieces: _Pieces
+    run_of_piece: NDArray[np.intp]
+    box: NDArray[np.intp]  # box of each run
+    start: Array  # first q of the run
+    end: Interval  # last q of the run (an enclosure, when unwrapped past the circle's cut)
+    mono: NDArray[np.int8]  # certified sign of dF/dq over the run, 0 if none
+    finite: NDArray[np.bool_]
+
+
+@dataclass(frozen=True, eq=False)
+class ConstraintLeg:
+    """A leg with one actuated joint and a scalar constraint ``F(X, q) = 0``.
+
+    Parameters
+    ----------
+    joint : str
+        Name of the actuated joint.
+    f, df_dq, d2f_dq2 : callable
+        ``F``, ``dF/dq`` and ``d2F/dq2`` as ``g(x_1, ..., x_k, q)``, on float
+        arrays and on Intervals (guarded, see :mod:`moveability.mechanisms.expressions`).
+    df_dx : sequence of callable
+        ``dF/dX_j`` for each pose axis, same signature.
+    prismatic : bool
+        A prismatic joint searched over ``stroke`` widened by a quarter of its
+        length on both sides; otherwise a revolute joint searched over the circle.
+    stroke : (float, float), optional
+        The prismatic joint's limits.
+    closed_form : callable, optional
+        ``closed_form(points) -> (m, n)`` candidate joint values at poses (any
+        order, NaN where not defined), used first by :meth:`angles` and checked
+        there: values that do not solve the constraint are replaced by the
+        numerical ones.
+    pieces, depth, max_pieces : int
+        Initial pieces of the search range, bisections of a piece, and pieces
+        per box beyond which a box is no longer refined.
+
+    Examples
+    --------
+    The leg of a five-bar at A = (0, 0), lengths 8 and 5:
+
+    >>> import numpy as np
+    >>> from moveability.mechanisms.expressions import cos, sin
+    >>> leg = ConstraintLeg(
+    ...     "t1",
+    ...     f=lambda x, y, t: (x - 8 * cos(t)) ** 2 + (y - 8 * sin(t)) ** 2 - 25,
+    ...     df_dq=lambda x, y, t: 16 * (x * sin(t) - y * cos(t)),
+    ...     d2f_dq2=lambda x, y, t: 16 * (x * cos(t) + y * sin(t)),
+    ...     df_dx=(lambda x, y, t: 2 * (x - 8 * cos(t)), lambda x, y, t: 2 * (y - 8 * sin(t))),
+    ... )
+    >>> lo, hi = np.array([[10.0, 3.0], [20.0, 0.0]]), np.array([[10.1, 3.1], [21.0, 1.0]])
+    >>> reach = leg.reach(lo, hi)
+    >>> reach.status.tolist()  # REGULAR, REACH_OUT
+    [1, 0]
+    >>> q = leg.angles(np.array([[10.0, 3.0]]))
+    >>> bool(np.allclose(leg.constraint(np.array([[10.0, 3.0]] * 2), q[0]), 0.0))
+    True
+    >>> bool(reach.branches[0].contains(q[0, 0])[0])
+    True
+    """
+
+    joint: str
+    f: Function
+    df_dq: Function
+    d2f_dq2: Function
+    df_dx: Sequence[Function]
+    prismatic: bool = False
+    stroke: tuple[float, float] | None = None
+    closed_form: Callable[[Array], Array] | None = None
+    pieces: int = 32
+    depth: int = 8
+    max_pieces: int = 64
+    _range: tuple[float, float] = field(init=False, repr=False)
+
+    n_branches = 2
+
+    def __post_init__(self) -> None:
+        if self.prismatic:
+            if self.stroke is None:
+                raise ValueError("a prismatic leg needs its stroke")
+            lo, hi = (float(v) for v in self.stroke)
+            margin = 0.25 * (hi - lo)
+            rng = (lo - margin, hi + margin)
+        else:
+            # just past pi: the pieces cover the circle although float pi < pi
+            rng = (-float(np.pi), float(np.nextafter(np.pi, np.inf)))
+        object.__setattr__(self, "_range", rng)
+
+    # ---------------------------------------------------------------- points
+    def _call(self, g: Function, points: Array, angles: Array) -> Array:
+        p = np.asarray(points, dtype=np.float64)
+        coords = [p[..., j] for j in range(p.shape[-1])]
+        with _quiet():
+            return np.asarray(g(*coords, np.asarray(angles, dtype=np.float64)), dtype=np.float64)
+
+    def constraint(self, points: Array, angles: Array) -> Array:
+        """``F(X, q)`` at poses and joint values."""
+        return self._call(self.f, points, angles)
+
+    def serial_term(self, points: Array, angles: Array) -> Array:
+        """``dF/dq``: zero at a serial singularity; positive on branch 0."""
+        return self._call(self.df_dq, points, angles)
+
+    def a_row(self, points: Array, angles: Array) -> Array:
+        """The leg's row of A, ``dF/dX``, shape (..., k)."""
+        return np.stack([self._call(g, points, angles) for g in self.df_dx], axis=-1)
+
+    def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]:
+        """Enclosures of ``dF/dX_j`` over boxes of poses and joint enclosures."""
+        coords = [Interval(lo[:, j], hi[:, j]) for j in range(lo.shape[1])]
+        with _quiet():
+            return [_as_iv(g(*coords, angles), lo.shape[0]) for g in self.df_dx]
+
+    def angles(self, points: Array, clip: bool = False) -> Array:
+        """Joint value of each branch at each pose, shape (m, 2); NaN where unreachable.
+
+        Roots are isolated as in :meth:`reach` on the poses themselves and
+        polished in floats; where that cannot separate them (near a fold) the
+        range is sampled. With ``clip``, a pose whose minimum of ``|F|`` is within
+        rounding of zero (1e-10 relative to the sampled values) gets its double
+        root on both branches.
+        """
+        p = np.asarray(points, dtype=np.float64).reshape(-1, len(self.df_dx))
+        out = np.full((p.shape[0], 2), np.nan)
+        if p.shape[0] == 0:
+            return out
+        if self.closed_form is not None:
+            out = self._from_closed_form(p)
+        todo = np.flatnonzero(~np.isfinite(out).all(axis=1))
+        if todo.size:
+            out[todo] = self._numerical(p[todo], clip)
+        return out
+
+    def _from_closed_form(self, p: Array) -> Array:
+        assert self.closed_form is not None
+        with _quiet():
+            cand = np.asarray(self.closed_form(p), dtype=np.float64).reshape(p.shape[0], -1)
+        out = np.full((p.shape[0], 2), np.nan)
+        scale = 1.0 + np.abs(p).max(axis=1) ** 2
+        for c in range(cand.shape[1]):
+            q = cand[:, c]
+            residual = np.abs(self.constraint(p, q))
+            d = self.serial_term(p, q)
+            ok = np.isfinite(q) & (residual <= 1e-9 * scale)
+            for b, good in ((0, d > 0), (1, d < 0)):
+                slot = ok & good & np.isnan(out[:, b])
+                out[slot, b] = q[slot]
+        return out
+
+    def _numerical(self, p: Array, clip: bool) -> Array:
+        out = np.full((p.shape[0], 2), np.nan)
+        reach = self.reach(p, p)
+        regular = reach.status == REGULAR
+        for b in (0, 1):
+            enc = reach.branches[b]
+            q = self._polish(p[regular], enc.lo[regular], enc.hi[regular], (1, -1)[b])
+            out[regular, b] = q
+        if self.prismatic:
+            # a branch enclosed beyond the widened stroke has no root there
+            beyond = (out < self._range[0]) | (out > self._range[1])
+            out[beyond] = np.nan
+        rest = np.flatnonzero(~regular & (clip | (reach.status != REACH_OUT)))
+        if rest.size:
+            out[rest] = self._sampled(p[rest], clip)
+        return out
+
+    def _polish(self, p: Array, a: Array, b: Array, sign: int) -> Array:
+        """Roots of ``sign * F`` increasing on ``[a, b]`` (certified bracket), in floats."""
+        a, b = a.copy(), b.copy()
+        for _ in range(80):
+            mid = 0.5 * (a + b)
+            below = sign * self.constraint(p, mid) < 0
+            a = np.where(below, mid, a)
+            b = np.where(below, b, mid)
+            if (b - a <= 4 * np.spacing(np.abs(a) + np.abs(b))).all():
+                break
+        return 0.5 * (a + b)
+
+    def _sampled(self, p: Array, clip: bool, n: int = 720) -> Array:
+        """Both branches by sampling the range: exactly two sign changes of F, else NaN."""
+        m = p.shape[0]
+        start, stop = self._range
+        grid = np.linspace(start, stop, n + 1)
+        if not self.prismatic:
+            grid = grid[:-1]
+        pp = np.repeat(p, grid.size, axis=0)
+        qq = np.tile(grid, m)
+        fv = self.constraint(pp, qq).reshape(m, grid.size)
+        nxt = np.roll(fv, -1, axis=1) if not self.prismatic else fv[:, 1:]
+        cur = fv if not self.prismatic else fv[:, :-1]
+        change = (cur * nxt < 0) | (cur == 0)
+        count = change.sum(axis=1)
+        out = np.full((m, 2), np.nan)
+        step = grid[1] - grid[0]
+        rows, cols = np.nonzero(change & (count == 2)[:, None])
+        if rows.size:
+            a = grid[cols]
+            b = a + step
+            c0, c1 = cur[rows, cols], nxt[rows, cols]
+            sign = np.where((c0 < 0) | ((c0 == 0) & (c1 > 0)), 1, -1)
+            roots = np.empty(rows.size)
+            for s in (1, -1):
+                sel = sign == s
+                roots[sel] = self._polish(p[rows[sel]], a[sel], b[sel], s)
+            d = self.serial_term(p[rows], roots)
+            for branch, good in ((0, d > 0), (1, d < 0)):
+                out[rows[good], branch] = roots[good]
+            bad = ~np.isfinite(out[rows]).all(axis=1)
+            out[rows[bad]] = np.nan
+        if clip:
+            none = np.flatnonzero(count == 0)
+            if none.size:
+                k = np.argmin(np.abs(fv[none]), axis=1)
+                q = self._extremum(p[none], grid[k] - step, grid[k] + step)
+                value = np.abs(self.constraint(p[none], q))
+                near = value <= 1e-10 * (1.0 + np.abs(fv[none]).max(axis=1))
+                out[none[near]] = q[near, None]
+        return out
+
+    def _extremum(self, p: Array, a: Array, b: Array) -> Array:
+        """A zero of ``dF/dq`` on ``[a, b]`` by bisection (the extremum of F between)."""
+        da = self.serial_term(p, a)
+        for _ in range(80):
+            mid = 0.5 * (a + b)
+            dm = self.serial_term(p, mid)
+            same = np.sign(dm) == np.sign(da)
+            a = np.where(same, mid, a)
+            da = np.where(same, dm, da)
+            b = np.where(same, b, mid)
+        return 0.5 * (a + b)
+
+    # ----------------------------------------------------------------- boxes
+    def _isolate(self, lo: Array, hi: Array) -> _Pieces:
+        """Pieces of the search range that may hold a root, per box."""
+        n = lo.shape[0]
+        start, stop = self._range
+        edges = np.linspace(start, stop, self.pieces + 1)
+        edges[0], edges[-1] = start, stop
+        box = np.repeat(np.arange(n), self.pieces)
+        qlo = np.tile(edges[:-1], n)
+        qhi = np.tile(edges[1:], n)
+        done: list[_Pieces] = []
+        counts = np.zeros(n, dtype=np.int64)
+        for level in range(self.depth + 1):
+            if not box.size:
+                break
+            fv = self._f_box(lo, hi, box, Interval(qlo, qhi))
+            keep = ~((fv.lo > 0) | (fv.hi < 0))
+            box, qlo, qhi = box[keep], qlo[keep], qhi[keep]
+            fv = fv[keep]
+            finite = np.isfinite(fv.lo) & np.isfinite(fv.hi)
+            dv = self._box_eval(self.df_dq, lo, hi, box, Interval(qlo, qhi))
+            mono = np.where(finite & (dv.lo > 0), 1, np.where(finite & (dv.hi < 0), -1, 0)).astype(
+                np.int8
+            )
+            total = counts + np.bincount(box, minlength=n)
+            split = (mono == 0) & (total[box] <= self.max_pieces) & (level < self.depth)
+            final = ~split
+            done.append(_Pieces(box[final], qlo[final], qhi[final], mono[final], finite[final]))
+            counts += np.bincount(box[final], minlength=n)
+            mid = 0.5 * (qlo[split] + qhi[split])
+            box = np.repeat(box[split], 2)
+            new_lo = np.empty(box.size)
+            new_hi = np.empty(box.size)
+            new_lo[0::2], new_lo[1::2] = qlo[split], mid
+            new_hi[0::2], new_hi[1::2] = mid, qhi[split]
+            qlo, qhi = new_lo, new_hi
+        pieces = _Pieces(
+            np.concatenate([d.box for d in done]) if done else np.zeros(0, dtype=np.intp),
+            np.concatenate([d.lo for d in done]) if done else np.zeros(0),
+            np.concatenate([d.hi for d in done]) if done else np.zeros(0),
+            np.concatenate([d.mono for d in done]) if done else np.zeros(0, dtype=np.int8),
+            np.concatenate([d.finite for d in done]) if done else np.zeros(0, dtype=bool),
+        )
+        order = np.lexsort((pieces.lo, pieces.box))
+        return pieces.take(order)
+
+    def _f_box(self, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
+        """Enclosure of F over boxes x q: the natural one met with the mean-value form
+        ``F(c, q) + sum_j dF/dX_j(box, q) (X_j - c_j)`` about the box's centre ``c``."""
+        natural = self._box_eval(self.f, lo, hi, box, q)
+        centre = 0.5 * (lo + hi)
+        mean = self._box_eval(self.f, centre, centre, box, q)
+        for j, g in enumerate(self.df_dx):
+            dj = self._box_eval(g, lo, hi, box, q)
+            offset = Interval(lo[box, j] - centre[box, j], hi[box, j] - centre[box, j])
+            # the offsets are rounded: widen them by an ulp of the bounds
+            offset = Interval(
+                np.nextafter(np.minimum(offset.lo, 0.0), -_INF),
+                np.nextafter(np.maximum(offset.hi, 0.0), _INF),
+            )
+            mean = mean + dj * offset
+        with _quiet():
+            m_lo = np.where(np.isnan(mean.lo), -_INF, mean.lo)
+            m_hi = np.where(np.isnan(mean.hi), _INF, mean.hi)
+            n_lo = np.where(np.isnan(natural.lo), -_INF, natural.lo)
+            n_hi = np.where(np.isnan(natural.hi), _INF, natural.hi)
+        return Interval(np.maximum(n_lo, m_lo), np.minimum(n_hi, m_hi))
+
+    def _box_eval(self, g: Function, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
+        coords = [Interval(lo[box, j], hi[box, j]) for j in range(lo.shape[1])]
+        with _quiet():
+            return _as_iv(g(*coords, q), q.lo.shape[0])
+
+    def _runs(self, pieces: _Pieces, n: int) -> _Runs:
+        """Group the pieces into runs; on the circle, a run across the cut is unwrapped."""
+        m = pieces.box.size
+        start_q, stop_q = self._range
+        new = np.ones(m, dtype=bool)
+        if m:
+            new[1:] = (pieces.box[1:] != pieces.box[:-1]) | (pieces.lo[1:] != pieces.hi[:-1])
+        run = np.cumsum(new) - 1
+        n_runs = int(run[-1]) + 1 if m else 0
+        shifted = np.zeros(m, dtype=bool)
+        if m and not self.prismatic:
+            first = np.ones(m, dtype=bool)
+            first[1:] = pieces.box[1:] != pieces.box[:-1]
+            last = np.ones(m, dtype=bool)
+            last[:-1] = pieces.box[1:] != pieces.box[:-1]
+            i_first, i_last = np.flatnonzero(first), np.flatnonzero(last)
+            wrap = (
+                (pieces.lo[i_first] == start_q)
+                & (pieces.hi[i_last] == stop_q)
+                & (run[i_first] != run[i_last])
+            )
+            # the box's first run continues its last one, one turn on
+            pos = np.searchsorted(pieces.box[i_first], pieces.box)
+            head = wrap[pos] & (run == run[i_first][pos])
+            shifted = head
+            run = np.where(head, run[i_last][pos], run)
+            if wrap.any():
+                _, run = np.unique(run, return_inverse=True)
+                n_runs = int(run.max()) + 1
+        run_box = np.zeros(n_runs, dtype=np.intp)
+        run_box[run] = pieces.box
+        start = np.full(n_runs, np.inf)
+        np.minimum.at(start, run[~shifted], pieces.lo[~shifted])
+        end_plain = np.full(n_runs, -np.inf)
+        np.maximum.at(end_plain, run[~shifted], pieces.hi[~shifted])
+        end_turn = np.full(n_runs, -np.inf)
+        np.maximum.at(end_turn, run[shifted], pieces.hi[shifted])
+        wrapped = np.isfinite(end_turn)
+        # the last q of a wrapped run, one turn on: an enclosure of end + 2 pi
+        end = Interval(end_plain)
+        if wrapped.any():
+            turned = Interval(end_turn[wrapped]) + _TWO_PI
+            e_lo, e_hi = end.lo.copy(), end.hi.copy()
+            e_lo[wrapped], e_hi[wrapped] = turned.lo, turned.hi
+            end = Interval(e_lo, e_hi)
+        mono_lo = np.full(n_runs, 2, dtype=np.int8)
+        mono_hi = np.full(n_runs, -2, dtype=np.int8)
+        np.minimum.at(mono_lo, run, pieces.mono)
+        np.maximum.at(mono_hi, run, pieces.mono)
+        mono = np.where(mono_lo == mono_hi, mono_lo, 0).astype(np.int8)
+        finite = np.ones(n_runs, dtype=bool)
+        np.logical_and.at(finite, run, pieces.finite)
+        return _Runs(pieces, run, run_box, start, end, mono, finite)
+
+    def reach(self, lo: Array, hi: Array) -> LegReach:
+        """Reach code, branch enclosures and fold certificates over boxes ``[lo, hi]`` (n, k)."""
+        lo = np.asarray(lo, dtype=np.float64)
+        hi = np.asarray(hi, dtype=np.float64)
+        n = lo.shape[0]
+        pieces = self._isolate(lo, hi)
+        runs = self._runs(pieces, n)
+        n_runs = np.bincount(runs.box, minlength=n)
+
+        # certified runs: F of definite opposite signs at the two ends
+        s = runs.mono.astype(np.float64)
+        f_start = self._box_eval(self.f, lo, hi, runs.box, Interval(runs.start))
+        f_end = self._box_eval(self.f, lo, hi, runs.box, runs.end)
+        cert = (runs.mono != 0) & runs.finite
+        cert &= np.where(
+            s > 0, (f_start.hi < 0) & (f_end.lo > 0), (f_start.lo > 0) & (f_end.hi < 0)
+        )
+        n_pos = np.bincount(runs.box[cert & (s > 0)], minlength=n)
+        n_neg = np.bincount(runs.box[cert & (s < 0)], minlength=n)
+        n_cert = n_pos + n_neg
+
+        status = np.full(n, REACH_UNKNOWN, dtype=np.uint8)
+        branches = [Interval(np.full(n, -_INF), np.full(n, _INF)) for _ in range(2)]
+        if self.prismatic:
+            regular = (n_cert == n_runs) & (n_pos <= 1) & (n_neg <= 1) & (n_runs > 0)
+        else:
+            regular = (n_runs == 2) & (n_pos == 1) & (n_neg == 1)
+        status[regular] = REGULAR
+        status[n_runs == 0] = REACH_OUT
+
+        # contract the certified roots of the regular boxes
+        use = cert & regular[runs.box]
+        if use.any():
+            r_lo, r_hi = self._contract(lo, hi, runs, np.flatnonzero(use))
+            idx = np.flatnonzero(use)
+            for b, sign in ((0, 1), (1, -1)):
+                sel = s[idx] == sign
+                branches[b].lo[runs.box[idx[sel]]] = r_lo[sel]
+                branches[b].hi[runs.box[idx[sel]]] = r_hi[sel]
+        if self.prismatic:
+            # a branch without root in the widened stroke: beyond the stroke
+            beyond = self._range[1] + 1.0 + abs(self._range[1])
+            for b, count in ((0, n_pos), (1, n_neg)):
+                none = regular & (count == 0)
+                branches[b].lo[none] = beyond
+                branches[b].hi[none] = beyond
+
+        # one run: its hull holds every root; try the fold certificates
+        hull = Interval(np.full(n, -_INF), np.full(n, _INF))
+        single = np.flatnonzero(n_runs == 1)
+        fold_connected = np.zeros(n, dtype=bool)
+        if single.size:
+            run_of_box = np.full(n, -1, dtype=np.intp)
+            run_of_box[runs.box] = np.arange(runs.box.size)
+            r = run_of_box[single]
+            hull.lo[single] = runs.start[r]
+            hull.hi[single] = runs.end.hi[r]
+            convexity, connected = self._fold(lo, hi, runs, single, r)
+            fold = (convexity != 0) & (status[single] == REACH_UNKNOWN)
+            status[single[fold & (convexity > 0)]] = FOLD_OUTER
+            status[single[fold & (convexity < 0)]] = FOLD_INNER
+            fold_connected[single] = fold & connected
+        return LegReach(status=status, branches=branches, hull=hull, fold_connected=fold_connected)
+
+    def _contract(
+        self, lo: Array, hi: Array, runs: _Runs, idx: NDArray[np.intp], iterations: int = 40
+    ) -> tuple[Array, Array]:
+        """Enclosures of the roots of certified runs ``idx``, by bisection on F's sign."""
+        box = runs.box[idx]
+        sign = runs.mono[idx].astype(np.float64)
+        # lower bound: the largest point certified below the root (sign * F < 0)
+        below_a = runs.start[idx].copy()
+        below_b = runs.end.lo[idx].copy()
+        # upper bound: the smallest point certified above it (sign * F > 0)
+        above_a = runs.start[idx].copy()
+        above_b = runs.end.hi[idx].copy()
+        for _ in range(iterations):
+            m1 = 0.5 * (below_a + below_b)
+            m2 = 0.5 * (above_a + above_b)
+            v = self._box_eval(
+                self.f,
+                lo,
+                hi,
+                np.concatenate([box, box]),
+                Interval(np.concatenate([m1, m2])),
+            )
+            k = box.size
+            s2 = np.concatenate([sign, sign])
+            neg = np.where(s2 > 0, v.hi < 0, v.lo > 0)
+            pos = np.where(s2 > 0, v.lo > 0, v.hi < 0)
+            below_a = np.where(neg[:k], m1, below_a)
+            below_b = np.where(neg[:k], below_b, m1)
+            above_b = np.where(pos[k:], m2, above_b)
+            above_a = np.where(pos[k:], above_a, m2)
+        return below_a, above_b
+
+    def _fold(
+        self, lo: Array, hi: Array, runs: _Runs, boxes: NDArray[np.intp], r: NDArray[np.intp]
+    ) -> tuple[NDArray[np.int8], NDArray[np.bool_]]:
+        """Fold certificates of boxes with one run ``r``: convexity sign (0: none), connected."""
+        k = lo.shape[1]
+        n_b = boxes.size
+        pc = runs.pieces
+        # pieces of these runs
+        sel = np.isin(runs.run_of_piece, r)
+        p_idx = np.flatnonzero(sel)
+        local = np.full(runs.box.size, -1, dtype=np.intp)
+        local[r] = np.arange(n_b)
+        p_local = local[runs.run_of_piece[p_idx]]
+        p_box = pc.box[p_idx]
+        q = Interval(pc.lo[p_idx], pc.hi[p_idx])
+        finite = pc.finite[p_idx]
+        d2 = self._box_eval(self.d2f_dq2, lo, hi, p_box, q)
+        d1 = self._box_eval(self.df_dq, lo, hi, p_box, q)
+        d1_ok = np.isfinite(d1.lo) & np.isfinite(d1.hi)
+        ok_d2 = np.isfinite(d2.lo) & np.isfinite(d2.hi) & finite & d1_ok
+        convex_p = (ok_d2 & (d2.lo > 0)).astype(np.int64)
+        concave_p = (ok_d2 & (d2.hi < 0)).astype(np.int64)
+        n_p = np.bincount(p_local, minlength=n_b)
+        convex = np.bincount(p_local, weights=convex_p, minlength=n_b) == n_p
+        concave = np.bincount(p_local, weights=concave_p, minlength=n_b) == n_p
+        s2 = np.where(convex, 1.0, np.where(concave, -1.0, 0.0))
+        # G = s2 F positive at both ends of Q
+        f_start = self._box_eval(self.f, lo, hi, boxes, Interval(runs.start[r]))
+        f_end = self._box_eval(self.f, lo, hi, boxes, runs.end[r])
+        ends = np.where(
+            s2 > 0,
+            (f_start.lo > 0) & (f_end.lo > 0),
+            (f_start.hi < 0) & (f_end.hi < 0),
+        )
+        ok = (s2 != 0) & ends
+        # the witnesses below only for the boxes passing so far
+        keep_p = ok[p_local]
+        p_box, p_local, q = p_box[keep_p], p_local[keep_p], q[keep_p]
+        n_p = np.bincount(p_local, minlength=n_b)
+        s2p = s2[p_local]
+        q_mid = Interval(q.mid)
+
+        def g_at(points_lo: Array, points_hi: Array, qq: Interval) -> Interval:
+            """G = s2 F over pose boxes (one per piece) and q."""
+            coords = [Interval(points_lo[:, j], points_hi[:, j]) for j in range(k)]
+            with _quiet():
+                v = _as_iv(self.f(*coords, qq), qq.lo.shape[0])
+            return Interval(np.where(s2p > 0, v.lo, -v.hi), np.where(s2p > 0, v.hi, -v.lo))
+
+        # a corner certainly reachable (G < 0 at some piece's middle) and one certainly not
+        # (G > 0 on every piece): candidates chosen in floats, then certified
+        n_corners = 1 << k
+        g_min = np.full((n_corners, n_b), np.inf)
+        g_low = np.full((n_corners, n_b), np.inf)
+        for corner in range(n_corners):
+            pick = np.array([(corner >> j) & 1 for j in range(k)], dtype=bool)
+            point = np.where(pick, hi[p_box], lo[p_box])
+            with _quiet():
+                vals = [s2p * self.constraint(point, v) for v in (q.lo, q.mid, q.hi)]
+            np.minimum.at(g_min[corner], p_local, vals[1])
+            np.minimum.at(g_low[corner], p_local, np.minimum(np.minimum(vals[0], vals[1]), vals[2]))
+        g_min = np.where(np.isnan(g_min), np.inf, g_min)
+        g_low = np.where(np.isnan(g_low), -np.inf, g_low)
+        best_in = np.argmin(g_min, axis=0)
+        best_out = np.argmax(g_low, axis=0)
+        bits = (1 << np.arange(k))[None, :]
+        pick_in = (best_in[p_local][:, None] & bits) > 0
+        pick_out = (best_out[p_local][:, None] & bits) > 0
+        point_in = np.where(pick_in, hi[p_box], lo[p_box])
+        point_out = np.where(pick_out, hi[p_box], lo[p_box])
+        g_mid = g_at(point_in, point_in, q_mid)
+        reachable = np.bincount(p_local, weights=g_mid.hi < 0, minlength=n_b) > 0
+        g_all = g_at(point_out, point_out, q)
+        unreachable = np.bincount(p_local, weights=g_all.lo > 0, minlength=n_b) == n_p
+        ok &= reachable & unreachable
+        # connectivity: an axis along which G is monotone, and its low face reachable
+        connected = np.zeros(n_b, dtype=bool)
+        for j in range(k):
+            dj = self._box_eval(self.df_dx[j], lo, hi, p_box, q)
+            fin = np.isfinite(dj.lo) & np.isfinite(dj.hi)
+            up_p = fin & np.where(s2p > 0, dj.lo > 0, dj.hi < 0)  # dG/dX_j > 0
+            down_p = fin & np.where(s2p > 0, dj.hi < 0, dj.lo > 0)
+            up = np.bincount(p_local, weights=up_p, minlength=n_b) == n_p
+            down = np.bincount(p_local, weights=down_p, minlength=n_b) == n_p
+            for direction, mask in ((1, up), (-1, down)):
+                if not mask.any():
+                    continue
+                f_lo, f_hi = lo[p_box].copy(), hi[p_box].copy()
+                face = lo[p_box, j] if direction > 0 else hi[p_box, j]
+                f_lo[:, j] = face
+                f_hi[:, j] = face
+                g_face = g_at(f_lo, f_hi, q_mid)
+                face_ok = np.bincount(p_local, weights=g_face.hi < 0, minlength=n_b) > 0
+                connected |= mask & face_ok
+        return np.where(ok, s2, 0.0).astype(np.int8), ok & connected
+
+    # ------------------------------------------------------------------ folds
+    def fold_waypoints(self, lo: Array, hi: Array, status: int) -> tuple[Array, Array]:
+        """Not available: the reachable part of a fold box need not be star-shaped.
+
+        Use :meth:`fold_path` instead.
+        """
+        raise NotImplementedError(
+            f"leg {self.joint}: no hub for a fold box; plan through fold_path instead"
+        )
+
+    def fold_path(self, lo: Array, hi: Array, pose: Array) -> Array:
+        """Poses from ``pose`` to a fold pose of a ``fold_connected`` box, shape (2, k).
+
+        The motion is the straight segment along the certified axis ``j`` (see the
+        module's notes): every pose on it is reachable, and at its end the two
+        branches meet (within rounding: the last pose found reachable).
+
+        Raises
+        ------
+        ValueError
+            If the box is not certified ``fold_connected`` or ``pose`` is unreachable.
+        """
+        lo = np.asarray(lo, dtype=np.float64).reshape(1, -1)
+        hi = np.asarray(hi, dtype=np.float64).reshape(1, -1)
+        x0 = np.asarray(pose, dtype=np.float64).reshape(-1)
+        reach = self.reach(lo, hi)
+        if not reach.fold_connected[0]:
+            raise ValueError(f"leg {self.joint}: the box is not certified fold-connected")
+        axis, direction, s2, q_lo, q_hi = self._fold_axis(lo, hi)
+
+        def m(points: Array) -> Array:
+            """min over Q of G = s2 F at poses (G convex on Q)."""
+            a = np.full(points.shape[0], q_lo)
+            b = np.full(points.shape[0], q_hi)
+            for _ in range(60):
+                mid = 0.5 * (a + b)
+                rising = s2 * self.serial_term(points, mid) > 0
+                a = np.where(rising, a, mid)
+                b = np.where(rising, mid, b)
+            return s2 * self.constraint(points, 0.5 * (a + b))
+
+        if m(x0[None, :])[0] > 0:
+            raise ValueError(f"leg {self.joint}: the pose is not reachable")
+        far = x0.copy()
+        far[axis] = hi[0, axis] if direction > 0 else lo[0, axis]
+        t_in, t_out = 0.0, 1.0
+        if m(far[None, :])[0] <= 0:
+            t_in = 1.0
+        for _ in range(55):
+            if t_in == 1.0:
+                break
+            t = 0.5 * (t_in + t_out)
+            if m((x0 + t * (far - x0))[None, :])[0] <= 0:
+                t_in = t
+            else:
+                t_out = t
+        return np.stack([x0, x0 + t_in * (far - x0)])
+
+    def _fold_axis(self, lo: Array, hi: Array) -> tuple[int, int, float, float, float]:
+        """Axis, direction in which G grows, convexity and Q of one fold-connected box."""
+        pieces = self._isolate(lo, hi)
+        runs = self._runs(pieces, 1)
+        q = Interval(pieces.lo, pieces.hi)
+        box = np.zeros(pieces.box.size, dtype=np.intp)
+        d2 = self._box_eval(self.d2f_dq2, lo, hi, box, q)
+        s2 = 1.0 if (d2.lo > 0).all() else -1.0
+        for j in range(lo.shape[1]):
+            dj = self._box_eval(self.df_dx[j], lo, hi, box, q)
+            for direction in (1, -1):
+                g = s2 * direction
+                if (np.where(g > 0, dj.lo > 0, dj.hi < 0)).all():
+                    lo_f, hi_f = lo.copy(), hi.copy()
+                    face = lo[0, j] if direction > 0 else hi[0, j]
+                    lo_f[0, j] = hi_f[0, j] = face
+                    v = self._box_eval(self.f, lo_f, hi_f, box, Interval(q.mid))
+                    if (np.where(s2 > 0, v.hi < 0, v.lo > 0)).any():
+                        return j, direction, s2, float(runs.start[0]), float(runs.end.hi[0])
+        raise ValueError(f"leg {self.joint}: no monotone axis")  # pragma: no cover
+
+
+def _as_iv(value: Any, n: int) -> Interval:
+    """An Interval of shape (n,) from an expression's value (constants broadcast)."""
+    v = value if isinstance(value, Interval) else Interval(value)
+    return Interval(np.broadcast_to(v.lo, (n,)).copy(), np.broadcast_to(v.hi, (n,)).copy())

@@ -1,0 +1,607 @@
+"""User-defined mechanisms: each leg's constraint ``F_i(X, q_i) = 0`` as an expression.
+
+A spec names the pose and joint variables, the box of poses to explore, each
+leg's constraint and (optionally) closed-form inverse-kinematic branches. The
+paper's five-bar::
+
+    mechanism = "custom"
+    pose = ["x", "y"]
+    joints = ["t1", "t2"]
+    [parameters]
+    L0 = 7.0
+    L1 = 8.0
+    L2 = 5.0
+    L3 = 8.0
+    L4 = 5.0
+    [[legs]]
+    joint = "t1"
+    constraint = "(x - L1*cos(t1))**2 + (y - L1*sin(t1))**2 - L2**2"
+    [[legs]]
+    joint = "t2"
+    constraint = "(x - L0 - L3*cos(t2))**2 + (y - L3*sin(t2))**2 - L4**2"
+    [limits]
+    t1 = [0.0, "pi"]
+    t2 = [0.0, "pi"]
+    [bounds]
+    x = [-14.0, 22.0]
+    y = [-14.0, 14.0]
+
+Keys: ``pose`` (names of the pose coordinates), optional ``periodic`` (pose
+coordinates that wrap around; their bounds must span one turn, 2 pi),
+``joints`` (names of the actuated joints, one per leg), ``[parameters]``
+(finite numbers), ``[[legs]]`` each with ``joint``, ``constraint``, optional
+``kind`` (``"revolute"``, the default, or ``"prismatic"``) and optional
+``branches`` (expressions of the pose giving the joint's values, used at
+points only and checked there), ``[limits]`` per joint (``[lo, hi]``,
+radians for a revolute joint, with ``"pi"`` expressions; or
+``"unlimited"`` for a revolute joint), ``[bounds]`` per pose coordinate
+(``[lo, hi]``, numbers or ``"pi"`` expressions).
+
+Expressions may use the pose, joint and parameter names, numbers, ``pi``,
+``+ - * / **`` and the functions ``sin cos tan sqrt exp log atan2 abs``.
+They are read by Python's :mod:`ast` parser and checked node by node (no
+``eval``), then built as sympy expressions; sympy differentiates them, and
+each derivative is printed as Python code calling the guarded functions of
+:mod:`moveability.mechanisms.expressions`, so one function evaluates both on
+float arrays and on intervals. Numbers are kept exact (rationals) and
+enclosed when evaluated over intervals; parameters enter as numbers at
+evaluation.
+
+Entry points: :func:`normalise_custom_spec` and :class:`CustomMechanism`.
+"""
+
+from __future__ import annotations
+
+import ast
+import keyword
+import math
+from collections.abc import Callable, Mapping, Sequence
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+import sympy
+from numpy.typing import NDArray
+
+from .. import intervals as iv
+from ..intervals import Interval
+from ..limits import JointLimit
+from ..spec import SpecError, parse_angle
+from . import expressions as ex
+from .base import Mechanism
+from .constraint_leg import ConstraintLeg
+
+__all__ = ["CustomMechanism", "compile_expression", "normalise_custom_spec"]
+
+Array = NDArray[np.float64]
+
+_KEYS = (
+    "mechanism",
+    "pose",
+    "periodic",
+    "joints",
+    "parameters",
+    "legs",
+    "limits",
+    "bounds",
+)
+_LEG_KEYS = ("joint", "constraint", "kind", "branches")
+_KINDS = ("revolute", "prismatic")
+_FUNCTIONS = {
+    "sin": sympy.sin,
+    "cos": sympy.cos,
+    "tan": sympy.tan,
+    "sqrt": sympy.sqrt,
+    "exp": sympy.exp,
+    "log": sympy.log,
+    "atan2": sympy.atan2,
+    "abs": sympy.Abs,
+}
+_ARITY = {"atan2": 2}
+_RESERVED = {*_FUNCTIONS, "pi", "E", "I"}
+_TWO_PI_LO = math.nextafter(2 * math.pi, 0.0)
+_TWO_PI_HI = math.nextafter(2 * math.pi, math.inf)
+_EXPRESSION_ALLOWED = (
+    "an expression of the declared names, numbers, pi, + - * / ** and "
+    + ", ".join(sorted(_FUNCTIONS))
+)
+
+
+# --------------------------------------------------------------------- parsing
+def _parse(text: object, key: str, names: Mapping[str, sympy.Symbol]) -> sympy.Expr:
+    """A sympy expression from text, checked node by node (nothing is evaluated)."""
+    if not isinstance(text, str) or not text.strip():
+        raise SpecError(key, _EXPRESSION_ALLOWED, text)
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except SyntaxError as error:
+        raise SpecError(key, f"a well-formed expression ({error.msg})", text) from None
+
+    def build(node: ast.AST) -> sympy.Expr:
+        if isinstance(node, ast.Expression):
+            return build(node.body)
+        if isinstance(node, ast.Constant):
+            value = node.value
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise SpecError(key, _EXPRESSION_ALLOWED + f" (not {value!r})", text)
+            if not math.isfinite(value):
+                raise SpecError(key, "finite numbers", text)
+            return sympy.Integer(value) if isinstance(value, int) else sympy.Rational(value)
+        if isinstance(node, ast.Name):
+            if node.id in names:
+                return names[node.id]
+            if node.id == "pi":
+                return sympy.pi
+            raise SpecError(
+                key, _EXPRESSION_ALLOWED, _Plain(f"unknown symbol {node.id!r} in {key}")
+            )
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
+            operand = build(node.operand)
+            return -operand if isinstance(node.op, ast.USub) else operand
+        if isinstance(node, ast.BinOp):
+            left, right = build(node.left), build(node.right)
+            if isinstance(node.op, ast.Add):
+                return left + right
+            if isinstance(node.op, ast.Sub):
+                return left - right
+            if isinstance(node.op, ast.Mult):
+                return left * right
+            if isinstance(node.op, ast.Div):
+                return left / right
+            if isinstance(node.op, ast.Pow):
+                return left**right
+            shown = "'^' (write powers as **)" if isinstance(node.op, ast.BitXor) else "operator"
+            raise SpecError(key, _EXPRESSION_ALLOWED, _Plain(f"unsupported {shown} in {key}"))
+        if isinstance(node, ast.Call):
+            func = node.func.id if isinstance(node.func, ast.Name) else None
+            if func not in _FUNCTIONS:
+                shown = func if func is not None else ast.unparse(node.func)
+                raise SpecError(
+                    key, _EXPRESSION_ALLOWED, _Plain(f"unknown function {shown!r} in {key}")
+                )
+            if node.keywords or len(node.args) != _ARITY.get(func, 1):
+                raise SpecError(
+                    key,
+                    f"{func} with {_ARITY.get(func, 1)} argument(s)",
+                    _Plain(ast.unparse(node)),
+                )
+            return _FUNCTIONS[func](*(build(a) for a in node.args))
+        raise SpecError(
+            key, _EXPRESSION_ALLOWED, _Plain(f"unsupported {ast.unparse(node)!r} in {key}")
+        )
+
+    expr = build(tree)
+    if expr.has(sympy.zoo, sympy.nan, sympy.oo, -sympy.oo, sympy.I):
+        raise SpecError(key, "a finite real expression", text)
+    return expr
+
+
+class _Plain(str):
+    """Text shown as is in an error message."""
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return str.__str__(self)
+
+
+# ------------------------------------------------------------------- printing
+class _Printer:
+    """Python source of a sympy expression, calling the guarded functions."""
+
+    def __init__(self, names: Mapping[sympy.Symbol, str]) -> None:
+        self.names = names
+
+    def __call__(self, e: sympy.Basic) -> str:
+        if isinstance(e, sympy.Symbol):
+            return self.names[e]
+        if e is sympy.pi:
+            return "PI"
+        if e is sympy.E:
+            return "exp(1)"
+        if isinstance(e, sympy.Integer):
+            return f"({int(e)})"
+        if isinstance(e, sympy.Rational):
+            return f"rational({int(e.p)}, {int(e.q)})"
+        if isinstance(e, sympy.Float):
+            return f"rational({Fraction(float(e)).numerator}, {Fraction(float(e)).denominator})"
+        if isinstance(e, sympy.Add):
+            return "(" + " + ".join(self(a) for a in e.args) + ")"
+        if isinstance(e, sympy.Mul):
+            return "(" + " * ".join(self(a) for a in e.args) + ")"
+        if isinstance(e, sympy.Pow):
+            base, n = e.args
+            if isinstance(n, sympy.Integer):
+                return f"power({self(base)}, {int(n)})"
+            if n == sympy.Rational(1, 2):
+                return f"sqrt({self(base)})"
+            if n == sympy.Rational(-1, 2):
+                return f"power(sqrt({self(base)}), -1)"
+            return f"exp({self(n)} * log({self(base)}))"
+        names = {
+            sympy.sin: "sin",
+            sympy.cos: "cos",
+            sympy.tan: "tan",
+            sympy.exp: "exp",
+            sympy.log: "log",
+            sympy.Abs: "absolute",
+            sympy.atan2: "atan2",
+        }
+        if isinstance(e, sympy.Function) and e.func in names:
+            return f"{names[e.func]}(" + ", ".join(self(a) for a in e.args) + ")"
+        if isinstance(e, sympy.sign):
+            # derivative of abs: d|u| = sign(u) du, undefined at 0 (guarded over intervals)
+            return f"sign({self(e.args[0])})"
+        raise SpecError("expression", _EXPRESSION_ALLOWED, _Plain(str(e)))
+
+
+def _sign(x: Any) -> Any:
+    if isinstance(x, Interval):
+        pos, neg = x.lo > 0, x.hi < 0
+        value = np.where(pos, 1.0, np.where(neg, -1.0, 0.0))
+        both = ~pos & ~neg
+        return Interval(np.where(both, -np.inf, value), np.where(both, np.inf, value))
+    return np.sign(x)
+
+
+def _rational_float(p: int, q: int) -> float:
+    return float(Fraction(p, q))
+
+
+_PI_IV = Interval(np.float64(np.pi), np.nextafter(np.pi, np.inf))
+_COMMON = {**ex.FUNCTIONS, "absolute": ex.absolute, "power": ex.power, "sign": _sign}
+_FLOAT_NS = {**_COMMON, "PI": float(np.pi), "rational": _rational_float}
+_INTERVAL_NS = {**_COMMON, "PI": _PI_IV, "rational": iv.rational}
+
+
+def compile_expression(
+    expr: sympy.Expr, args: Sequence[sympy.Symbol], key: str = "expression"
+) -> Callable[..., Any]:
+    """A function of ``args`` evaluating ``expr`` on float arrays or on Intervals.
+
+    Examples
+    --------
+    >>> import numpy as np, sympy
+    >>> from moveability.intervals import Interval
+    >>> x, t = sympy.symbols("x t")
+    >>> g = compile_expression((x - 2 * sympy.cos(t)) ** 2 / 3, [x, t])
+    >>> round(float(g(np.float64(1.0), np.float64(0.0))), 12)
+    0.333333333333
+    >>> r = g(Interval(1.0, 1.5), Interval(0.0))
+    >>> bool(r.lo <= 1 / 3 and 0.25 / 3 >= r.lo)
+    True
+    """
+    names = {s: f"_a{i}" for i, s in enumerate(args)}
+    body = _Printer(names)(expr)
+    source = f"def _g({', '.join(names.values())}):\n    return {body}\n"
+    code = compile(source, f"<{key}>", "exec")
+    float_ns: dict[str, Any] = dict(_FLOAT_NS)
+    interval_ns: dict[str, Any] = dict(_INTERVAL_NS)
+    exec(code, float_ns)  # the source is printed from a checked sympy tree
+    exec(code, interval_ns)
+    g_float, g_interval = float_ns["_g"], interval_ns["_g"]
+
+    def g(*values: Any) -> Any:
+        if ex.is_interval(*values):
+            return g_interval(*values)
+        with np.errstate(all="ignore"):
+            return g_float(*values)
+
+    g.__doc__ = f"{key}: {expr}"
+    return g
+
+
+# ---------------------------------------------------------------- the spec
+def _names(value: object, key: str, taken: set[str]) -> list[str]:
+    allowed = "a list of distinct names (identifiers)"
+    if isinstance(value, str) or not isinstance(value, Sequence) or not value:
+        raise SpecError(key, allowed, value)
+    out: list[str] = []
+    for i, name in enumerate(value):
+        if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
+            raise SpecError(f"{key}[{i}]", "a name (an identifier)", name)
+        if name in _RESERVED:
+            raise SpecError(f"{key}[{i}]", "a name that is not a function nor pi", name)
+        if name in taken or name in out:
+            raise SpecError(f"{key}[{i}]", "a name not used before", name)
+        out.append(name)
+    return out
+
+
+def _number(value: object, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise SpecError(key, "a finite number", value)
+    if not math.isfinite(value):
+        raise SpecError(key, "a finite number", value)
+    return float(value)
+
+
+def _table(value: object, key: str, allowed: str) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise SpecError(key, allowed, value)
+    return value
+
+
+def _pair(value: object, key: str, angle: bool) -> list[float]:
+    allowed = "[lo, hi] with lo < hi"
+    if isinstance(value, str) or not isinstance(value, Sequence) or len(value) != 2:
+        raise SpecError(key, allowed, value)
+    if angle:
+        lo, hi = parse_angle(value[0], f"{key}[0]"), parse_angle(value[1], f"{key}[1]")
+    else:
+        lo, hi = _number(value[0], f"{key}[0]"), _number(value[1], f"{key}[1]")
+    if not lo < hi:
+        raise SpecError(key, allowed + " (an empty or reversed range)", value)
+    return [lo, hi]
+
+
+def normalise_custom_spec(data: Mapping[str, Any]) -> dict[str, Any]:
+    """Check a custom mechanism's spec and return it normalised (JSON-ready, stable).
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed TOML (see the module's notes), or a normalised spec.
+
+    Returns
+    -------
+    dict
+        ``{"mechanism": "custom", "pose": [...], "periodic": [...], "joints":
+        [...], "parameters": {name: float}, "legs": [{"joint", "constraint",
+        "kind", "branches"?}], "limits": {joint: [lo, hi] or "unlimited"},
+        "bounds": {pose: [lo, hi]}}``, legs in the order of ``joints``.
+
+    Raises
+    ------
+    SpecError
+        Naming the key at fault: ``legs[1].constraint`` for a malformed
+        expression or an unknown symbol (named), a leg whose constraint does
+        not involve its joint, a joint without leg or without limit, duplicated
+        names, bounds with ``lo >= hi``, non-finite numbers, unknown keys.
+
+    Examples
+    --------
+    >>> spec = normalise_custom_spec({
+    ...     "mechanism": "custom", "pose": ["x"], "joints": ["q"],
+    ...     "parameters": {"a": 2},
+    ...     "legs": [{"joint": "q", "constraint": "x - a*cos(q)"}],
+    ...     "limits": {"q": [0, "pi"]}, "bounds": {"x": [-3, 3]}})
+    >>> spec["limits"], spec["legs"][0]["kind"]
+    ({'q': [0.0, 3.141592653589793]}, 'revolute')
+    >>> normalise_custom_spec(spec) == spec
+    True
+    >>> normalise_custom_spec({**spec, "legs": [{"joint": "q", "constraint": "x - z*cos(q)"}]})
+    Traceback (most recent call last):
+        ...
+    moveability.spec.SpecError: invalid legs[0].constraint: expected an expression of \
+the declared names, numbers, pi, + - * / ** and abs, atan2, cos, exp, log, sin, sqrt, tan, \
+got unknown symbol 'z' in legs[0].constraint
+    """
+    if not isinstance(data, Mapping):
+        raise SpecError("spec", "a mapping", data)
+    for key in data:
+        if key not in _KEYS:
+            raise SpecError(str(key), "one of the keys " + ", ".join(_KEYS), _Plain(str(key)))
+    if data.get("mechanism", "custom") != "custom":
+        raise SpecError("mechanism", "'custom'", data.get("mechanism"))
+    pose = _names(data.get("pose"), "pose", set())
+    joints = _names(data.get("joints"), "joints", set(pose))
+    periodic_raw = data.get("periodic", [])
+    if isinstance(periodic_raw, str) or not isinstance(periodic_raw, Sequence):
+        raise SpecError("periodic", "a list of pose names", periodic_raw)
+    periodic: list[str] = []
+    for i, name in enumerate(periodic_raw):
+        if name not in pose or name in periodic:
+            raise SpecError(f"periodic[{i}]", f"one of the pose names {pose}, once", name)
+        periodic.append(str(name))
+    params_raw = _table(data.get("parameters", {}), "parameters", "a table of numbers")
+    parameters: dict[str, float] = {}
+    taken = set(pose) | set(joints)
+    for name, value in params_raw.items():
+        key = f"parameters.{name}"
+        if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
+            raise SpecError(key, "a name (an identifier)", name)
+        if name in _RESERVED or name in taken:
+            raise SpecError(key, "a name not used by a pose, joint or function", name)
+        parameters[name] = _number(value, key)
+
+    symbols = {n: sympy.Symbol(n, real=True) for n in (*pose, *joints, *parameters)}
+    legs_raw = data.get("legs")
+    if isinstance(legs_raw, str) or not isinstance(legs_raw, Sequence) or not legs_raw:
+        raise SpecError("legs", "a list of legs ([[legs]] tables)", legs_raw)
+    by_joint: dict[str, dict[str, Any]] = {}
+    for i, leg in enumerate(legs_raw):
+        key = f"legs[{i}]"
+        leg = _table(leg, key, "a table with joint and constraint")
+        for k in leg:
+            if k not in _LEG_KEYS:
+                raise SpecError(f"{key}.{k}", "one of " + ", ".join(_LEG_KEYS), _Plain(str(k)))
+        joint = leg.get("joint")
+        if joint not in joints:
+            raise SpecError(f"{key}.joint", f"one of the joints {joints}", joint)
+        if joint in by_joint:
+            raise SpecError(f"{key}.joint", "a joint not driven by another leg", joint)
+        text = leg.get("constraint")
+        expr = _parse(text, f"{key}.constraint", symbols)
+        if symbols[joint] not in expr.free_symbols:
+            raise SpecError(f"{key}.constraint", f"an expression involving {joint}", text)
+        others = [s.name for s in expr.free_symbols if s.name in joints and s.name != joint]
+        if others:
+            raise SpecError(
+                f"{key}.constraint", f"an expression of the pose and {joint} only", text
+            )
+        kind = leg.get("kind", "revolute")
+        if kind not in _KINDS:
+            raise SpecError(f"{key}.kind", "'revolute' or 'prismatic'", kind)
+        entry: dict[str, Any] = {"joint": joint, "constraint": str(text).strip(), "kind": kind}
+        if "branches" in leg:
+            branches = leg["branches"]
+            if isinstance(branches, str) or not isinstance(branches, Sequence) or not branches:
+                raise SpecError(f"{key}.branches", "a list of expressions", branches)
+            pose_syms = {n: symbols[n] for n in (*pose, *parameters)}
+            for b, branch in enumerate(branches):
+                _parse(branch, f"{key}.branches[{b}]", pose_syms)
+            entry["branches"] = [str(b).strip() for b in branches]
+        by_joint[joint] = entry
+    for joint in joints:
+        if joint not in by_joint:
+            raise SpecError("legs", f"a leg for joint {joint}", _Plain("nothing"))
+
+    limits_raw = _table(data.get("limits"), "limits", "a table giving each joint's limits")
+    limits: dict[str, Any] = {}
+    for name in limits_raw:
+        if name not in joints:
+            raise SpecError(f"limits.{name}", f"one of the joints {joints}", limits_raw[name])
+    for joint in joints:
+        key = f"limits.{joint}"
+        if joint not in limits_raw:
+            raise SpecError(key, '[lo, hi] or "unlimited"', _Plain("nothing"))
+        value = limits_raw[joint]
+        prismatic = by_joint[joint]["kind"] == "prismatic"
+        if isinstance(value, str):
+            if value.strip().lower() != "unlimited" or prismatic:
+                allowed = "[lo, hi]" if prismatic else '[lo, hi] or "unlimited"'
+                raise SpecError(key, allowed, value)
+            limits[joint] = "unlimited"
+            continue
+        pair = _pair(value, key, angle=not prismatic)
+        if not prismatic and pair[1] - pair[0] > _TWO_PI_HI:
+            raise SpecError(key, 'a range no wider than 2*pi (or "unlimited")', value)
+        limits[joint] = pair
+
+    bounds_raw = _table(data.get("bounds"), "bounds", "a table giving each pose coordinate's range")
+    for name in bounds_raw:
+        if name not in pose:
+            raise SpecError(f"bounds.{name}", f"one of the pose names {pose}", bounds_raw[name])
+    bounds: dict[str, list[float]] = {}
+    for name in pose:
+        key = f"bounds.{name}"
+        if name not in bounds_raw:
+            raise SpecError(key, "[lo, hi]", _Plain("nothing"))
+        pair = _pair(bounds_raw[name], key, angle=True)
+        if name in periodic and not (_TWO_PI_LO <= pair[1] - pair[0] <= _TWO_PI_HI):
+            raise SpecError(key, "one full turn (hi - lo = 2*pi) for a periodic coordinate", pair)
+        bounds[name] = pair
+    return {
+        "mechanism": "custom",
+        "pose": pose,
+        "periodic": periodic,
+        "joints": joints,
+        "parameters": parameters,
+        "legs": [by_joint[j] for j in joints],
+        "limits": limits,
+        "bounds": bounds,
+    }
+
+
+class CustomMechanism(Mechanism):
+    """A mechanism from a custom spec (see :func:`normalise_custom_spec`).
+
+    Parameters
+    ----------
+    spec : mapping
+        A custom spec, normalised or not.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> m = CustomMechanism({
+    ...     "mechanism": "custom", "pose": ["x", "y"], "joints": ["t1", "t2"],
+    ...     "parameters": {"L0": 7, "L1": 8, "L2": 5, "L3": 8, "L4": 5},
+    ...     "legs": [
+    ...         {"joint": "t1", "constraint": "(x - L1*cos(t1))**2 + (y - L1*sin(t1))**2 - L2**2"},
+    ...         {"joint": "t2",
+    ...          "constraint": "(x - L0 - L3*cos(t2))**2 + (y - L3*sin(t2))**2 - L4**2"}],
+    ...     "limits": {"t1": [0, "pi"], "t2": [0, "pi"]},
+    ...     "bounds": {"x": [-14, 22], "y": [-14, 14]}})
+    >>> m.joint_names, m.pose_names
+    (('t1', 't2'), ('x', 'y'))
+    >>> q = m.joint_angles(np.array([[3.5, 9.0]]))
+    >>> bool(np.allclose(m.constraints(np.array([[3.5, 9.0]] * 4), q[0]), 0.0))
+    True
+    """
+
+    name = "custom"
+
+    def __init__(self, spec: Mapping[str, Any]) -> None:
+        self.spec = normalise_custom_spec(spec)
+        s = self.spec
+        self.pose_names = tuple(s["pose"])
+        self.periodic_axes = tuple(s["pose"].index(n) for n in s["periodic"])
+        params = s["parameters"]
+        pose_syms = [sympy.Symbol(n, real=True) for n in s["pose"]]
+        param_syms = [sympy.Symbol(n, real=True) for n in params]
+        values = [params[n] for n in params]
+        symbols = {sym.name: sym for sym in (*pose_syms, *param_syms)}
+        legs = []
+        limits = []
+        for i, leg in enumerate(s["legs"]):
+            q = sympy.Symbol(leg["joint"], real=True)
+            key = f"legs[{i}].constraint"
+            f = _parse(leg["constraint"], key, {**symbols, q.name: q})
+            args = [*pose_syms, q, *param_syms]
+
+            def bind(
+                expr: sympy.Expr, what: str, args: list[sympy.Symbol] = args
+            ) -> Callable[..., Any]:
+                g = compile_expression(expr, args, what)
+                return lambda *xs: g(*xs, *values)
+
+            closed = None
+            if "branches" in leg:
+                exprs = [
+                    _parse(b, f"legs[{i}].branches[{k}]", symbols)
+                    for k, b in enumerate(leg["branches"])
+                ]
+                fns = [compile_expression(e, [*pose_syms, *param_syms]) for e in exprs]
+
+                def closed_form(points: Array, fns: Any = fns) -> Array:
+                    cols = [points[:, j] for j in range(points.shape[1])]
+                    return np.stack(
+                        [
+                            np.broadcast_to(
+                                np.asarray(g(*cols, *values), dtype=np.float64), (points.shape[0],)
+                            )
+                            for g in fns
+                        ],
+                        axis=1,
+                    )
+
+                closed = closed_form
+            limit = s["limits"][leg["joint"]]
+            prismatic = leg["kind"] == "prismatic"
+            if limit == "unlimited":
+                limits.append(JointLimit.unlimited())
+            else:
+                limits.append(JointLimit(limit[0], limit[1], prismatic=prismatic))
+            legs.append(
+                ConstraintLeg(
+                    leg["joint"],
+                    f=bind(f, key),
+                    df_dq=bind(sympy.diff(f, q), f"d{key}/d{q.name}"),
+                    d2f_dq2=bind(sympy.diff(f, q, 2), f"d2{key}/d{q.name}2"),
+                    df_dx=tuple(bind(sympy.diff(f, x), f"d{key}/d{x.name}") for x in pose_syms),
+                    prismatic=prismatic,
+                    stroke=(limit[0], limit[1]) if prismatic else None,
+                    closed_form=closed,
+                )
+            )
+        self.legs = tuple(legs)
+        self.limits = tuple(limits)
+        self.bounds = (
+            np.array([s["bounds"][n][0] for n in s["pose"]], dtype=np.float64),
+            np.array([s["bounds"][n][1] for n in s["pose"]], dtype=np.float64),
+        )
+
+    @classmethod
+    def from_spec(cls, spec: Mapping[str, Any]) -> CustomMechanism:
+        """The mechanism of a custom spec."""
+        return cls(spec)
+
+    def to_spec(self) -> dict[str, Any]:
+        """The normalised spec (JSON-ready)."""
+        return normalise_custom_spec(self.spec)
+
+    def __repr__(self) -> str:
+        legs = "; ".join(f"{leg['joint']}: {leg['constraint']} = 0" for leg in self.spec["legs"])
+        return f"CustomMechanism(pose={list(self.pose_names)}, {legs})"

@@ -1,0 +1,132 @@
+"""Functions that evaluate on float arrays and on :class:`~moveability.intervals.Interval`.
+
+A constraint written once with these functions serves both: at points (numpy
+arrays, NaN where undefined) and over boxes (outward-rounded enclosures).
+Over intervals, every function is *guarded*: where the argument may leave
+the function's domain or cross a discontinuity (``sqrt`` or ``log`` of a
+possibly negative number, ``tan`` at a pole, ``atan2`` across its cut along
+the negative x axis, a division by an interval holding 0) the enclosure is
+the whole real line. A finite enclosure of an expression over a box is thus a
+certificate that the expression is defined and continuous on the box, which
+the root isolation of :class:`~moveability.mechanisms.constraint_leg.ConstraintLeg`
+relies on.
+
+Examples
+--------
+>>> import numpy as np
+>>> from moveability.intervals import Interval
+>>> from moveability.mechanisms import expressions as ex
+>>> float(ex.sqrt(np.float64(4.0)))
+2.0
+>>> r = ex.sqrt(Interval([-1.0], [4.0]))
+>>> float(r.lo[0]), float(r.hi[0])
+(-inf, inf)
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import intervals as iv
+from ..intervals import Interval
+
+__all__ = [
+    "FUNCTIONS",
+    "absolute",
+    "atan2",
+    "cos",
+    "exp",
+    "is_interval",
+    "log",
+    "power",
+    "sin",
+    "sqrt",
+    "tan",
+]
+
+_INF = np.inf
+
+
+def is_interval(*values: Any) -> bool:
+    """Whether any of the values is an :class:`Interval` (the others are then lifted)."""
+    return any(isinstance(v, Interval) for v in values)
+
+
+def _whole(x: Interval, where: Any) -> Interval:
+    """``x``, replaced by the whole real line where ``where``."""
+    return Interval(np.where(where, -_INF, x.lo), np.where(where, _INF, x.hi))
+
+
+def sin(x: Any) -> Any:
+    """Sine."""
+    return iv.sin(x) if isinstance(x, Interval) else np.sin(x)
+
+
+def cos(x: Any) -> Any:
+    """Cosine."""
+    return iv.cos(x) if isinstance(x, Interval) else np.cos(x)
+
+
+def tan(x: Any) -> Any:
+    """Tangent (the whole line over an interval that may hold a pole)."""
+    return iv.tan(x) if isinstance(x, Interval) else np.tan(x)
+
+
+def exp(x: Any) -> Any:
+    """Exponential."""
+    return iv.exp(x) if isinstance(x, Interval) else np.exp(x)
+
+
+def log(x: Any) -> Any:
+    """Natural logarithm (the whole line over an interval reaching 0 or below)."""
+    if isinstance(x, Interval):
+        return _whole(iv.log(x), ~(x.lo > 0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(np.asarray(x) > 0, np.log(np.maximum(x, 0.0)), np.nan)
+
+
+def sqrt(x: Any) -> Any:
+    """Square root (the whole line over an interval reaching below 0)."""
+    if isinstance(x, Interval):
+        return _whole(iv.sqrt(x), ~(x.lo >= 0))
+    with np.errstate(invalid="ignore"):
+        return np.where(np.asarray(x) >= 0, np.sqrt(np.maximum(x, 0.0)), np.nan)
+
+
+def absolute(x: Any) -> Any:
+    """Absolute value."""
+    return iv.absolute(x) if isinstance(x, Interval) else np.abs(x)
+
+
+def power(x: Any, n: int) -> Any:
+    """``x ** n`` for an integer ``n`` (the whole line over ``1 / [.., 0, ..]``)."""
+    if isinstance(x, Interval):
+        if n < 0:
+            return _whole(iv.power(x, n), ~((x.lo > 0) | (x.hi < 0)))
+        return iv.power(x, n)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return np.power(np.asarray(x, dtype=np.float64), n)
+
+
+def atan2(y: Any, x: Any) -> Any:
+    """``atan2(y, x)`` in ``[-pi, pi]`` (the whole line over boxes meeting its cut)."""
+    if is_interval(y, x):
+        yi, xi = iv.as_interval(y), iv.as_interval(x)
+        cut = (xi.lo <= 0) & (yi.lo <= 0) & (yi.hi >= 0)
+        return _whole(iv.arctan2(yi, xi), cut)
+    return np.arctan2(y, x)
+
+
+#: the functions an expression may call, by the name it calls them
+FUNCTIONS = {
+    "sin": sin,
+    "cos": cos,
+    "tan": tan,
+    "exp": exp,
+    "log": log,
+    "sqrt": sqrt,
+    "abs": absolute,
+    "atan2": atan2,
+}

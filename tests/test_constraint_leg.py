@@ -1,0 +1,194 @@
+"""Soundness of ConstraintLeg's certificates, against roots found at sampled poses.
+
+The leg is the five-bar's first leg, ``F = |P - C(t)|^2 - b^2``: at a pose the
+roots are known in closed form (``RRLeg.angles``). For random boxes and poses
+sampled inside each box: REACH_OUT boxes have no root, REGULAR boxes have the
+two roots inside their enclosures with the branch's sign of dF/dq, fold boxes
+have their roots in ``hull``, and fold-connected boxes' fold paths end where
+the roots meet.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from moveability import intervals as iv
+from moveability.intervals import Interval
+from moveability.mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REGULAR
+from moveability.mechanisms.constraint_leg import ConstraintLeg
+from moveability.mechanisms.expressions import cos, sin
+from moveability.mechanisms.rr_leg import RRLeg
+
+A, B = 8.0, 5.0
+
+
+def five_bar_leg(a: float = A, b: float = B) -> ConstraintLeg:
+    return ConstraintLeg(
+        "t1",
+        f=lambda x, y, t: (x - a * cos(t)) ** 2 + (y - a * sin(t)) ** 2 - b * b,
+        df_dq=lambda x, y, t: 2 * a * (x * sin(t) - y * cos(t)),
+        d2f_dq2=lambda x, y, t: 2 * a * (x * cos(t) + y * sin(t)),
+        df_dx=(lambda x, y, t: 2 * (x - a * cos(t)), lambda x, y, t: 2 * (y - a * sin(t))),
+    )
+
+
+def _in(enclosure_lo, enclosure_hi, q, tol=1e-9):
+    """Whether angle q lies in [lo, hi] modulo 2 pi."""
+    k = np.floor((q - enclosure_lo) / (2 * np.pi))
+    q = q - 2 * np.pi * k
+    return (q >= enclosure_lo - tol) & (q <= enclosure_hi + tol)
+
+
+@pytest.mark.parametrize(("a", "b"), [(8.0, 5.0), (5.0, 8.0), (6.0, 6.0)])
+def test_reach_is_sound(a, b):
+    rng = np.random.default_rng(1)
+    leg, ref = five_bar_leg(a, b), RRLeg((0.0, 0.0), a, b, "t1")
+    n, per = 1500, 10
+    centre = rng.uniform(-(a + b) - 1, a + b + 1, (n, 2))
+    half = rng.uniform(0.01, 0.6, (n, 2))
+    lo, hi = centre - half, centre + half
+    reach = leg.reach(lo, hi)
+    u = rng.uniform(0, 1, (n, per, 2))
+    u[:, 0] = 0.0  # the corners too
+    u[:, 1] = 1.0
+    points = lo[:, None, :] + u * (hi - lo)[:, None, :]
+    q = ref.angles(points.reshape(-1, 2)).reshape(n, per, 2)
+    reachable = np.isfinite(q).all(axis=2)
+    assert not reachable[reach.status == REACH_OUT].any()
+    regular = reach.status == REGULAR
+    assert reachable[regular].all()
+    for branch in (0, 1):
+        lo_b = reach.branches[branch].lo[:, None]
+        hi_b = reach.branches[branch].hi[:, None]
+        # the closed form's roots, matched to the branch by the sign of dF/dq
+        d = leg.serial_term(points.reshape(-1, 2), q[:, :, branch].reshape(-1)).reshape(n, per)
+        sign = np.sign(d)
+        ok = _in(lo_b, hi_b, q[:, :, branch])
+        want = 1.0 if branch == 0 else -1.0
+        assert ok[regular].all()
+        assert (sign[regular] == want).all()
+    fold = (reach.status == FOLD_OUTER) | (reach.status == FOLD_INNER)
+    for branch in (0, 1):
+        qq = q[:, :, branch]
+        inside = _in(reach.hull.lo[:, None], reach.hull.hi[:, None], qq)
+        assert inside[fold & reachable.any(axis=1)][reachable[fold & reachable.any(axis=1)]].all()
+    # the statuses are not vacuous
+    assert regular.sum() > 250 and (reach.status == REACH_OUT).sum() > 100 and fold.sum() > 25
+    assert reach.fold_connected.sum() > 15
+    assert not reach.fold_connected[~fold].any()
+
+
+def test_fold_connected_boxes_hold_both_sides_and_a_fold_path():
+    rng = np.random.default_rng(2)
+    leg, ref = five_bar_leg(), RRLeg((0.0, 0.0), A, B, "t1")
+    theta = rng.uniform(-np.pi, np.pi, 400)
+    radius = np.where(rng.uniform(size=400) < 0.5, A + B, A - B) + rng.uniform(-0.2, 0.2, 400)
+    centre = np.stack([radius * np.cos(theta), radius * np.sin(theta)], axis=1)
+    half = rng.uniform(0.05, 0.4, (400, 1))
+    lo, hi = centre - half, centre + half
+    reach = leg.reach(lo, hi)
+    boxes = np.flatnonzero(reach.fold_connected)
+    assert boxes.size > 100
+    for i in boxes[:15]:
+        grid = np.stack(
+            np.meshgrid(*[np.linspace(lo[i, j], hi[i, j], 15) for j in range(2)]), -1
+        ).reshape(-1, 2)
+        ok = np.isfinite(ref.angles(grid)).all(axis=1)
+        assert ok.any() and not ok.all()
+        for pose in grid[ok][:1]:
+            path = leg.fold_path(lo[i], hi[i], pose)
+            assert np.allclose(path[0], pose)
+            assert ((path >= lo[i] - 1e-12) & (path <= hi[i] + 1e-12)).all()
+            # along the path every pose is reachable; at its end the roots meet
+            segment = path[0] + np.linspace(0, 1, 50)[:, None] * (path[1] - path[0])
+            q = ref.angles(segment, clip=True)
+            assert np.isfinite(q).all()
+            gap = np.abs(np.angle(np.exp(1j * (q[-1, 0] - q[-1, 1]))))
+            assert gap < 1e-3
+
+
+def test_angles_match_closed_form_and_points_are_labelled_by_serial_sign():
+    rng = np.random.default_rng(3)
+    leg, ref = five_bar_leg(), RRLeg((0.0, 0.0), A, B, "t1")
+    p = rng.uniform(-14, 14, (2000, 2))
+    q, q_ref = leg.angles(p), ref.angles(p)
+    assert (np.isfinite(q) == np.isfinite(q_ref)).all()
+    ok = np.isfinite(q_ref)
+    assert np.abs(np.angle(np.exp(1j * (q[ok] - q_ref[ok])))).max() < 1e-9
+    # the five-bar's branch 0 (theta + alpha) is where dF/dq > 0
+    both = ok.all(axis=1)
+    assert (leg.serial_term(p[both], q[both, 0]) > 0).all()
+    assert np.abs(leg.constraint(p[both], q[both, 0])).max() < 1e-9
+
+
+def test_point_boxes_near_the_fold_and_clip():
+    leg = five_bar_leg()
+    inside = np.array([[A + B - 1e-9, 0.0], [0.0, A - B + 1e-9]])
+    q = leg.angles(inside)
+    assert np.isfinite(q).all()
+    beyond = np.array([[A + B + 1e-13, 0.0]])
+    assert np.isnan(leg.angles(beyond)).all()
+    assert np.isfinite(leg.angles(beyond, clip=True)).all()
+
+
+def test_prismatic_leg_with_one_root_in_its_stroke():
+    # a linear actuator from the origin: F = x^2 + y^2 - q^2, stroke [5, 10]
+    leg = ConstraintLeg(
+        "d",
+        f=lambda x, y, q: x * x + y * y - q**2,
+        df_dq=lambda x, y, q: -2 * q,
+        d2f_dq2=lambda x, y, q: -2 + 0 * q,
+        df_dx=(lambda x, y, q: 2 * x + 0 * q, lambda x, y, q: 2 * y + 0 * q),
+        prismatic=True,
+        stroke=(5.0, 10.0),
+    )
+    lo = np.array([[6.0, 0.0], [20.0, 0.0]])
+    hi = np.array([[6.5, 0.5], [21.0, 1.0]])
+    reach = leg.reach(lo, hi)
+    assert reach.status.tolist() == [REGULAR, REACH_OUT]
+    q = np.hypot(6.2, 0.3)
+    assert reach.branches[1].contains(q)[0]
+    # no root of positive dF/dq (q < 0) in the widened stroke: enclosed beyond it
+    assert reach.branches[0].lo[0] > 12.5
+    assert np.allclose(leg.angles(np.array([[6.2, 0.3]]))[0, 1], q)
+
+
+@settings(deadline=None, max_examples=60)
+@given(
+    st.floats(-12, 12),
+    st.floats(-12, 12),
+    st.floats(0.001, 1.0),
+    st.floats(0.001, 1.0),
+)
+def test_reach_property(cx, cy, wx, wy):
+    leg, ref = five_bar_leg(), RRLeg((0.0, 0.0), A, B, "t1")
+    lo, hi = np.array([[cx, cy]]), np.array([[cx + wx, cy + wy]])
+    reach = leg.reach(lo, hi)
+    corners = np.array([[cx, cy], [cx + wx, cy], [cx, cy + wy], [cx + wx, cy + wy]])
+    q = ref.angles(np.vstack([corners, 0.5 * (lo + hi)]))
+    if reach.status[0] == REACH_OUT:
+        assert np.isnan(q).all()
+    if reach.status[0] == REGULAR:
+        for b in (0, 1):
+            assert _in(reach.branches[b].lo[0], reach.branches[b].hi[0], q[:, b]).all()
+
+
+def test_guarded_expressions_never_certify_across_a_pole():
+    # F = tan(q) - x has a root on each branch of tan; the pieces across the poles
+    # must not be certified monotone (tan jumps there)
+    from moveability.mechanisms.expressions import tan
+
+    leg = ConstraintLeg(
+        "q",
+        f=lambda x, q: tan(q) - x,
+        df_dq=lambda x, q: 1 + tan(q) ** 2,
+        d2f_dq2=lambda x, q: 2 * tan(q) * (1 + tan(q) ** 2),
+        df_dx=(lambda x, q: -1 + 0 * q,),
+    )
+    reach = leg.reach(np.array([[0.2]]), np.array([[0.3]]))
+    # two roots, both with dF/dq > 0: not a regular leg
+    assert reach.status[0] != REGULAR
+    assert iv.tan(Interval(1.5, 1.6)).hi == np.inf
