@@ -117,11 +117,18 @@ MECHANISMS: dict[str, MechanismSchema] = {
         joints=("rho1", "rho2"),
         joint_kind="position",
     ),
+    "3-RRR": MechanismSchema(
+        parameters=("base", "platform", "proximal", "distal"),
+        joints=tuple(f"theta{i}" for i in _THREE),
+        kinds={"base": "points", "platform": "points", "proximal": "lengths", "distal": "lengths"},
+    ),
 }
 
 #: mechanisms whose specification has a format of its own: name -> normaliser
 #: (resolved lazily: the normalisers live with the mechanisms)
-_OWN_FORMAT: dict[str, str] = {}
+_OWN_FORMAT: dict[str, str] = {
+    "custom": "moveability.mechanisms.custom.normalise_custom_spec",
+}
 
 
 class _Plain(str):

@@ -11,14 +11,35 @@ from .base import Mechanism
 from .biglide import Biglide
 from .five_bar import FiveBar
 from .three_rpr import ThreeRPR
+from .three_rrr import ThreeRRR
 
-__all__ = ["MECHANISMS", "Biglide", "FiveBar", "Mechanism", "ThreeRPR", "from_spec"]
+__all__ = [
+    "MECHANISMS",
+    "Biglide",
+    "CustomMechanism",
+    "FiveBar",
+    "Mechanism",
+    "ThreeRPR",
+    "ThreeRRR",
+    "from_spec",
+]
 
+#: built-in mechanisms by spec name; ``"custom"`` (sympy, imported when used) too
 MECHANISMS: dict[str, type[Mechanism]] = {
     "five-bar": FiveBar,
     "3-RPR": ThreeRPR,
+    "3-RRR": ThreeRRR,
     "biglide": Biglide,
 }
+
+
+def __getattr__(name: str) -> Any:
+    # sympy takes a second to import: user-defined mechanisms load it when used
+    if name == "CustomMechanism":
+        from .custom import CustomMechanism
+
+        return CustomMechanism
+    raise AttributeError(name)
 
 
 def _limit(name: str, value: Any, prismatic: bool = False) -> JointLimit:
@@ -47,8 +68,12 @@ def from_spec(spec: Mapping[str, Any]) -> Mechanism:
     ('five-bar', ('theta1', 'theta2'))
     """
     name = spec.get("mechanism")
+    if name == "custom":
+        from .custom import CustomMechanism
+
+        return CustomMechanism.from_spec(spec)
     if name not in MECHANISMS:
-        raise InvalidParameterError("mechanism", f"one of {sorted(MECHANISMS)}", name)
+        raise InvalidParameterError("mechanism", f"one of {[*MECHANISMS, 'custom']}", name)
     params = dict(spec.get("parameters", {}))
     limits_spec = spec.get("limits", {})
 
@@ -76,4 +101,8 @@ def from_spec(spec: Mapping[str, Any]) -> Mechanism:
         lim = limits("rho1", "rho2", prismatic=True)
         L1, L2 = (float(v) for v in parameters("L1", "L2"))
         return Biglide(L1, L2, (lim[0], lim[1]))
+    if name == "3-RRR":
+        lim = limits("theta1", "theta2", "theta3")
+        base, platform, proximal, distal = parameters("base", "platform", "proximal", "distal")
+        return ThreeRRR(base, platform, proximal, distal, lim)
     raise InvalidParameterError("mechanism", f"one of {sorted(MECHANISMS)}", name)
