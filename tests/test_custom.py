@@ -227,3 +227,29 @@ def test_unknown_top_level_key():
     spec["lengths"] = {}
     with pytest.raises(SpecError, match="lengths"):
         normalise_custom_spec(spec)
+
+
+def test_planned_motion_changes_posture_through_a_user_defined_fold(pair):
+    """Planning crosses the fold boxes of a user-defined leg along the certified axis
+    (fold_anchor, fold_path): a motion through three poses of the largest region,
+    every configuration checked against the constraints, the region's sign and the
+    limits (by the planner, and again here)."""
+    custom, _ = pair
+    m = custom.mechanism
+    region = max(custom.regions, key=lambda r: r.area[0])
+    rng = np.random.default_rng(5)
+    cand = rng.uniform(*m.bounds, (3000, 2))
+    answers = custom.locate(cand)["points"]
+    inside = cand[[a["regions"][str(region.id)] == "in" for a in answers]]
+    changed = 0
+    for _ in range(3):
+        points = inside[rng.choice(len(inside), 3, replace=False)]
+        motion = custom.plan(points)
+        poses = np.array([c["pose"] for c in motion["path"]])
+        joints = np.array([c["joints"] for c in motion["path"]])
+        assert np.abs(m.constraints(poses, joints)).max() <= 1e-9
+        assert (np.sign(m.det_a(poses, joints)) == region.sign).all()
+        assert np.linalg.norm(np.diff(poses, axis=0), axis=1).max() <= PRECISION + 1e-12
+        changed += len({c["posture"] for c in motion["path"]}) > 1
+    if len(region.postures) > 1:
+        assert changed > 0

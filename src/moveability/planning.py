@@ -95,61 +95,96 @@ def _touching(analysis: Analysis, lo_u: Array, hi_u: Array, leaf: int, offset: A
     return shift
 
 
+class _Fold:
+    """How a motion crosses a leaf where one leg's branches meet (a certified fold).
+
+    Either the leaf's reachable part is star-shaped about a hub (``hub`` and
+    ``point`` from the mechanism's ``fold_waypoints``), or it is a union of
+    segments along one axis anchored on a reachable face (the leg's
+    ``fold_anchor`` and ``fold_path``).
+    """
+
+    def __init__(self, analysis: Analysis, leaf: int, offset: Array) -> None:
+        t = analysis.table
+        leaves = analysis.tree.leaves()
+        self.lo, self.hi, self.offset = leaves.lo[leaf], leaves.hi[leaf], offset
+        legs = tuple(int(i) for i in np.flatnonzero(t.folding[leaf]))
+        self.leg: Any = None
+        if len(legs) == 1 and hasattr(analysis.mechanism.legs[legs[0]], "fold_path"):
+            self.leg = analysis.mechanism.legs[legs[0]]
+            return
+        statuses = tuple(int(t.leg_status[leaf, i]) for i in legs)
+        self.hub, self.point = analysis.mechanism.fold_waypoints(legs, self.lo, self.hi, statuses)
+
+    def through(self, a: Array, b: Array) -> list[Array]:
+        """Poses between ``a`` and ``b`` (both reachable, in the leaf) to go through."""
+        if self.leg is None:
+            return [self.hub + self.offset]
+        off = self.offset
+        return [
+            self.leg.fold_anchor(self.lo, self.hi, a - off) + off,
+            self.leg.fold_anchor(self.lo, self.hi, b - off) + off,
+        ]
+
+    def change(self, at: Array, pu: int, pv: int) -> tuple[list[tuple[Array, int]], Array]:
+        """Waypoints changing posture from ``pu`` to ``pv``, and the pose reached."""
+        if self.leg is None:
+            hub, point = self.hub + self.offset, self.point + self.offset
+            return [(hub, pu), (point, pu), (point, pv), (hub, pv)], hub
+        fold = self.leg.fold_path(self.lo, self.hi, at - self.offset)[-1] + self.offset
+        return [(fold, pu), (fold, pv), (at, pv)], at
+
+
 def _waypoints(
     analysis: Analysis, nodes: list[int], begin: Array, end: Array, offset: Array
 ) -> tuple[list[tuple[Array, int]], Array]:
     """Poses and postures between which the pose moves in straight segments.
 
     Consecutive waypoints lie in one closed leaf: a leaf whose sheet is certified
-    is convex, and the reachable part of a fold leaf is star-shaped about its hub.
-    Poses are unwrapped: a path crossing the seam of a periodic angle goes on past
-    it, the leaves being shifted by whole turns (``offset`` for the first leaf;
-    the offset of the last one is returned with the waypoints).
+    is convex, and the reachable part of a fold leaf is crossed as :class:`_Fold`
+    says. Poses are unwrapped: a path crossing the seam of a periodic angle goes
+    on past it, the leaves being shifted by whole turns (``offset`` for the first
+    leaf; the offset of the last one is returned with the waypoints).
     """
     t = analysis.table
     n_post = t.status.shape[1]
     leaves = analysis.tree.leaves()
 
-    def fold(leaf: int) -> tuple[Array, Array] | None:
-        """Hub and fold point of a leaf where some leg folds, else None."""
-        if not t.folding[leaf].any():
-            return None
-        legs = tuple(int(i) for i in np.flatnonzero(t.folding[leaf]))
-        statuses = tuple(int(t.leg_status[leaf, i]) for i in legs)
-        hub, point = analysis.mechanism.fold_waypoints(
-            legs, leaves.lo[leaf], leaves.hi[leaf], statuses
-        )
-        return hub + offset, point + offset
+    def fold(leaf: int) -> _Fold | None:
+        return _Fold(analysis, leaf, offset) if t.folding[leaf].any() else None
 
-    out: list[tuple[Array, int]] = [(begin + offset, nodes[0] % n_post)]
+    current = begin + offset
+    out: list[tuple[Array, int]] = [(current, nodes[0] % n_post)]
     for u, v in itertools.pairwise(nodes):
         lu, pu = divmod(u, n_post)
         lv, pv = divmod(v, n_post)
         here = fold(lu)
         if lu == lv:
-            # a posture change inside a certified fold group, at the fold point
+            # a posture change inside a certified fold group, at a fold pose
             assert here is not None
-            hub, point = here
-            out += [(hub, pu), (point, pu), (point, pv), (hub, pv)]
+            steps, current = here.change(current, pu, pv)
+            out += steps
             continue
         # through the middle of the face (edge, corner) the two leaves share
         lo_u, hi_u = leaves.lo[lu] + offset, leaves.hi[lu] + offset
-        offset = _touching(analysis, lo_u, hi_u, lv, offset)
-        lo_v, hi_v = leaves.lo[lv] + offset, leaves.hi[lv] + offset
+        shift = _touching(analysis, lo_u, hi_u, lv, offset)
+        lo_v, hi_v = leaves.lo[lv] + shift, leaves.hi[lv] + shift
         shared = 0.5 * (np.maximum(lo_u, lo_v) + np.minimum(hi_u, hi_v))
         if here is not None:
-            out.append((here[0], pu))
+            out += [(pose, pu) for pose in here.through(current, shared)]
         out.append((shared, pu))
+        current, offset = shared, shift
     last_leaf, last_posture = divmod(nodes[-1], n_post)
     here = fold(last_leaf)
     if here is not None:
-        out.append((here[0], last_posture))
+        out += [(pose, last_posture) for pose in here.through(current, end + offset)]
     out.append((end + offset, last_posture))
     return out, offset
 
 
 def _joints(analysis: Analysis, poses: Array, posture: int) -> Array:
-    q = analysis.mechanism.joint_angles(poses)[:, posture, :]
+    # the poses of a plan are certified reachable: forgive the rounding at folds
+    q = analysis.mechanism.joint_angles(poses, clip=True)[:, posture, :]
     return q
 
 
@@ -201,7 +236,7 @@ def plan_motion(analysis: Analysis, points: Array, step: float | None = None) ->
         current = route[-1]
     all_poses = np.concatenate(poses)
     all_postures = np.concatenate(postures)
-    q = analysis.mechanism.joint_angles(all_poses)
+    q = analysis.mechanism.joint_angles(all_poses, clip=True)
     joints = q[np.arange(all_poses.shape[0]), all_postures]
     joints = _present(analysis, joints)
     _check(analysis, all_poses, joints, region.sign)

@@ -318,7 +318,8 @@ class ConstraintLeg:
             bad = ~np.isfinite(out[rows]).all(axis=1)
             out[rows[bad]] = np.nan
         if clip:
-            none = np.flatnonzero(count == 0)
+            # no crossing, or one (F exactly 0 at a sample): the double root of a fold
+            none = np.flatnonzero(count < 2)
             if none.size:
                 k = np.argmin(np.abs(fv[none]), axis=1)
                 q = self._extremum(p[none], grid[k] - step, grid[k] + step)
@@ -715,6 +716,20 @@ class ConstraintLeg:
             else:
                 t_out = t
         return np.stack([x0, x0 + t_in * (far - x0)])
+
+    def fold_anchor(self, lo: Array, hi: Array, pose: Array) -> Array:
+        """``pose`` moved along the certified axis onto the box's reachable face.
+
+        Every pose of that face is reachable and the segment from a reachable pose
+        to its anchor stays reachable (see the module's notes), so two reachable
+        poses of a ``fold_connected`` box join through their anchors.
+        """
+        lo2 = np.asarray(lo, dtype=np.float64).reshape(1, -1)
+        hi2 = np.asarray(hi, dtype=np.float64).reshape(1, -1)
+        axis, direction, *_ = self._fold_axis(lo2, hi2)
+        out = np.array(pose, dtype=np.float64, copy=True).reshape(-1)
+        out[axis] = lo2[0, axis] if direction > 0 else hi2[0, axis]
+        return out
 
     def _fold_axis(self, lo: Array, hi: Array) -> tuple[int, int, float, float, float]:
         """Axis, direction in which G grows, convexity and Q of one fold-connected box."""
