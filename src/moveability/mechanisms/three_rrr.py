@@ -185,11 +185,12 @@ class ThreeRRR(Mechanism):
     @classmethod
     def default(cls, limits: Sequence[JointLimit] | None = None) -> ThreeRRR:
         """The example design: base circumradius 10 (joints at 90, 210, 330 degrees),
-        platform circumradius 3, proximal and distal links 6."""
+        platform circumradius 3, proximal links 7 and distal links 5 (unequal: with
+        equal links a leg reaches its base joint with every angle)."""
         angles = np.deg2rad([90.0, 210.0, 330.0])
         base = [(10 * np.cos(t), 10 * np.sin(t)) for t in angles]
         platform = [(3 * np.cos(t), 3 * np.sin(t)) for t in angles]
-        return cls(base, platform, (6.0, 6.0, 6.0), (6.0, 6.0, 6.0), limits)
+        return cls(base, platform, (7.0, 7.0, 7.0), (5.0, 5.0, 5.0), limits)
 
     def to_spec(self) -> dict[str, Any]:
         """The spec mapping of this mechanism (JSON-ready)."""
