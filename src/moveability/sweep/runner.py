@@ -313,7 +313,7 @@ def _run_dask(
             ): chunk
             for chunk in chunks
         }
-        for future in as_completed(list(futures)):
+        for future in as_completed(list(futures), loop=client.loop):
             try:
                 rows = future.result()
             except Exception as error:  # a worker lost: its designs are recorded as failed
