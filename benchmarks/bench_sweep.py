@@ -7,16 +7,20 @@ the analyses, wherever they ran). The Dask cases compare workers started
 without ``MALLOC_TRIM_THRESHOLD_`` (what :func:`moveability.sweep.local_cluster`
 does), workers started with Dask's default ``MALLOC_TRIM_THRESHOLD_=65536``
 with and without :func:`~moveability.sweep.restore_malloc_thresholds` (what
-happens on an existing cluster). Every pool runs a small warm-up sweep first
-(worker start and compiled-kernel loading are not timed).
+happens on an existing cluster). All pools are started first and run a small
+warm-up sweep (worker start and compiled-kernel loading are not timed); then
+each round runs every case once, so that a change in the machine's speed
+during the benchmark weighs on every case alike.
 
-Run: ``python benchmarks/bench_sweep.py [--count 8] [--precision 0.1]``.
+Run: ``python benchmarks/bench_sweep.py [--count 8] [--precision 0.1] [--repeat 3]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import statistics
 import tempfile
 import time
 from pathlib import Path
@@ -34,8 +38,6 @@ def timed_sweep(
     """Wall seconds, summed design seconds and failures of one fresh sweep."""
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "designs.csv")
-        warm = os.path.join(tmp, "warm-up.csv")
-        run_sweep(spec, ["L2=4.5:5.5:4"], warm, eps, **how)
         start = time.perf_counter()
         summary = run_sweep(spec, vary, out, eps, **how)
         wall = time.perf_counter() - start
@@ -43,39 +45,71 @@ def timed_sweep(
     return wall, busy, summary["failed"]
 
 
+def cpu_steal() -> tuple[int, int] | None:
+    """(steal, total) CPU ticks since boot, from /proc/stat (Linux), else None."""
+    try:
+        with open("/proc/stat") as stream:
+            ticks = [int(t) for t in stream.readline().split()[1:]]
+    except (OSError, ValueError):
+        return None
+    return (ticks[7] if len(ticks) > 7 else 0), sum(ticks[:8])
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--count", type=int, default=8, help="values per varied name")
     parser.add_argument("--precision", type=float, default=0.1)
+    parser.add_argument("--repeat", type=int, default=3, help="rounds (each runs every case)")
     args = parser.parse_args()
     spec = load_spec(SPEC)
-    n = args.count
+    n, eps = args.count, args.precision
     vary = [f"L2=4:6:{n}", f"theta1.max=pi/2:pi:{n}"]
     print(
-        f"five-bar sweep: {n * n} designs ({' x '.join(vary)}), precision {args.precision}, "
-        f"{os.cpu_count()} cores"
+        f"five-bar sweep: {n * n} designs ({' x '.join(vary)}), precision {eps}, "
+        f"{os.cpu_count()} cores; {args.repeat} rounds, each running every case once"
     )
-    header = f"{'how':<52} {'seconds':>8} {'designs/s':>9} {'design s':>9} {'failed':>6}"
+    with contextlib.ExitStack() as stack:
+        cases: list[tuple[str, dict[str, Any]]] = [
+            ("1 process", {}),
+            ("joblib, 2 workers", {"jobs": 2}),
+        ]
+        for name, trim, fix in [
+            ("LocalCluster 2 workers, no MALLOC_TRIM_THRESHOLD_", False, True),
+            ("LocalCluster 2 workers, MALLOC_TRIM_THRESHOLD_, fix", True, True),
+            ("LocalCluster 2 workers, MALLOC_TRIM_THRESHOLD_, no fix", True, False),
+        ]:
+            cluster = stack.enter_context(local_cluster(n_workers=2, malloc_trim=trim))
+            cases.append((name, {"scheduler": cluster.scheduler_address, "malloc_fix": fix}))
+        # warm-up: workers started, compiled kernels loaded, allocator settings applied
+        for _, how in cases:
+            timed_sweep(spec, ["L2=4.5:5.5:4"], eps, **how)
+        results: dict[str, list[tuple[float, float, int]]] = {name: [] for name, _ in cases}
+        steal_start = cpu_steal()
+        for _ in range(args.repeat):
+            for name, how in cases:
+                results[name].append(timed_sweep(spec, vary, eps, **how))
+        steal_end = cpu_steal()
+
+    header = (
+        f"{'how':<54} {'best s':>7} {'median s':>8} {'designs/s':>9} {'design s':>8} {'failed':>6}"
+    )
     print(header)
     print("-" * len(header))
-
-    def show(name: str, wall: float, busy: float, failed: int) -> None:
-        print(f"{name:<52} {wall:>8.2f} {n * n / wall:>9.2f} {busy:>9.2f} {failed:>6}")
-
-    show("1 process", *timed_sweep(spec, vary, args.precision))
-    show("joblib, 2 workers", *timed_sweep(spec, vary, args.precision, jobs=2))
-    cases = [
-        ("LocalCluster, 2 workers (no MALLOC_TRIM_THRESHOLD_)", False, True),
-        ("LocalCluster, 2 workers, MALLOC_TRIM_THRESHOLD_ + fix", True, True),
-        ("LocalCluster, 2 workers, MALLOC_TRIM_THRESHOLD_, no fix", True, False),
-    ]
-    for name, trim, fix in cases:
-        with local_cluster(n_workers=2, malloc_trim=trim) as cluster:
-            result = timed_sweep(
-                spec, vary, args.precision, scheduler=cluster.scheduler_address, malloc_fix=fix
-            )
-        show(name, *result)
-    print("design s: the designs' own seconds, summed (time inside the analyses)")
+    for name, runs in results.items():
+        walls = [run[0] for run in runs]
+        median = statistics.median(walls)
+        busy = statistics.median(run[1] for run in runs)
+        failed = max(run[2] for run in runs)
+        print(
+            f"{name:<54} {min(walls):>7.2f} {median:>8.2f} {n * n / median:>9.2f} "
+            f"{busy:>8.2f} {failed:>6}"
+        )
+    print("designs/s: from the median; design s: the designs' own seconds, summed (median)")
+    if steal_start is not None and steal_end is not None:
+        total = steal_end[1] - steal_start[1]
+        if total > 0:
+            share = 100.0 * (steal_end[0] - steal_start[0]) / total
+            print(f"CPU time stolen by the hypervisor during the rounds: {share:.0f}%")
 
 
 if __name__ == "__main__":

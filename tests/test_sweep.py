@@ -256,6 +256,7 @@ def test_limit_end_of_unlimited_joint(tmp_path):
             "invalid --vary L2: expected each name once",
         ),
         (["--vary", "L2=4:5:2", "--jobs", "0"], "invalid --jobs"),
+        (["--vary", "L2=4:5:2", "--jobs", "two"], "invalid --jobs"),
         (
             ["--vary", "L2=4:5:2", "--jobs", "2", "--scheduler", "tcp://127.0.0.1:9"],
             "invalid --jobs",

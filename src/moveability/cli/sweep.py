@@ -43,9 +43,22 @@ def sweep_progress() -> Any:
     return None
 
 
+class _Jobs(click.ParamType):
+    """A positive integer; a bad value is an :class:`~.options.InputError` (one line)."""
+
+    name = "N"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> int:
+        try:
+            jobs = int(value)
+        except (TypeError, ValueError):
+            jobs = 0
+        if jobs < 1:
+            raise options.InputError(f"invalid --jobs: expected a positive integer, got {value!r}")
+        return jobs
+
+
 def _check_jobs(jobs: int | None, scheduler: str | None) -> int:
-    if jobs is not None and jobs < 1:
-        raise options.InputError(f"invalid --jobs: expected a positive integer, got {jobs}")
     if jobs is not None and scheduler is not None:
         raise options.InputError(
             "invalid --jobs: expected nothing with --scheduler (the Dask cluster sets the "
@@ -67,7 +80,7 @@ def _check_jobs(jobs: int | None, scheduler: str | None) -> int:
 )
 @options.precision_option
 @click.option(
-    "--jobs", "-j", type=int, default=None, help="Local worker processes (joblib). [default: 1]"
+    "--jobs", "-j", type=_Jobs(), default=None, help="Local worker processes (joblib). [default: 1]"
 )
 @click.option(
     "--scheduler",
