@@ -21,6 +21,8 @@ import argparse
 import contextlib
 import os
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -45,14 +47,31 @@ def timed_sweep(
     return wall, busy, summary["failed"]
 
 
-def cpu_steal() -> tuple[int, int] | None:
-    """(steal, total) CPU ticks since boot, from /proc/stat (Linux), else None."""
-    try:
-        with open("/proc/stat") as stream:
-            ticks = [int(t) for t in stream.readline().split()[1:]]
-    except (OSError, ValueError):
-        return None
-    return (ticks[7] if len(ticks) > 7 else 0), sum(ticks[:8])
+ONE_PROCESS = """
+import sys, time
+from moveability import analyze, load_spec
+from moveability.sweep import restore_malloc_thresholds
+if sys.argv[1] == "fix":
+    restore_malloc_thresholds()
+spec = load_spec(sys.argv[2])
+analyze(spec, precision=float(sys.argv[3]))
+best = float("inf")
+for _ in range(int(sys.argv[4])):
+    start = time.perf_counter()
+    analyze(spec, precision=float(sys.argv[3]))
+    best = min(best, time.perf_counter() - start)
+print(best)
+"""
+
+
+def one_process(eps: float, trim: bool, fix: bool, repeat: int = 5) -> float:
+    """Best seconds of one analysis of the paper's five-bar in a fresh process."""
+    env = {k: v for k, v in os.environ.items() if k != "MALLOC_TRIM_THRESHOLD_"}
+    if trim:
+        env["MALLOC_TRIM_THRESHOLD_"] = "65536"
+    args = [sys.executable, "-c", ONE_PROCESS, "fix" if fix else "-", str(SPEC), str(eps)]
+    out = subprocess.run([*args, str(repeat)], env=env, capture_output=True, text=True, check=True)
+    return float(out.stdout)
 
 
 def main() -> None:
@@ -84,11 +103,11 @@ def main() -> None:
         for _, how in cases:
             timed_sweep(spec, ["L2=4.5:5.5:4"], eps, **how)
         results: dict[str, list[tuple[float, float, int]]] = {name: [] for name, _ in cases}
-        steal_start = cpu_steal()
+        load_start = os.getloadavg()
         for _ in range(args.repeat):
             for name, how in cases:
                 results[name].append(timed_sweep(spec, vary, eps, **how))
-        steal_end = cpu_steal()
+        load_end = os.getloadavg()
 
     header = (
         f"{'how':<54} {'best s':>7} {'median s':>8} {'designs/s':>9} {'design s':>8} {'failed':>6}"
@@ -105,11 +124,25 @@ def main() -> None:
             f"{busy:>8.2f} {failed:>6}"
         )
     print("designs/s: from the median; design s: the designs' own seconds, summed (median)")
-    if steal_start is not None and steal_end is not None:
-        total = steal_end[1] - steal_start[1]
-        if total > 0:
-            share = 100.0 * (steal_end[0] - steal_start[0]) / total
-            print(f"CPU time stolen by the hypervisor during the rounds: {share:.0f}%")
+    print(
+        f"load average (1 min) before and after the rounds: {load_start[0]:.1f}, {load_end[0]:.1f}"
+    )
+
+    print(
+        f"\none analysis of the paper's five-bar at {eps} in a fresh process (best of 5, 3 rounds)"
+    )
+    single = {
+        "default allocator": (False, False),
+        "MALLOC_TRIM_THRESHOLD_=65536": (True, False),
+        "MALLOC_TRIM_THRESHOLD_=65536 + fix": (True, True),
+    }
+    best = {name: float("inf") for name in single}
+    for _ in range(3):
+        for name, (trim, fix) in single.items():
+            best[name] = min(best[name], one_process(eps, trim, fix))
+    base = best["default allocator"]
+    for name, seconds in best.items():
+        print(f"  {name:<36} {seconds:.3f} s  ({seconds / base:.2f} x)")
 
 
 if __name__ == "__main__":

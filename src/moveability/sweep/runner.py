@@ -346,7 +346,7 @@ def local_cluster(n_workers: int = 2, malloc_trim: bool = False, **kwargs: Any) 
         "threads_per_worker": 1,
         "processes": True,
         "host": "127.0.0.1",
-        "dashboard_address": None,
+        "dashboard_address": ":0",  # any free port: never "port 8787 in use" warnings
     }
     options.update(kwargs)
     with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
