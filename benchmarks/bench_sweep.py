@@ -10,7 +10,9 @@ with and without :func:`~moveability.sweep.restore_malloc_thresholds` (what
 happens on an existing cluster). All pools are started first and run a small
 warm-up sweep (worker start and compiled-kernel loading are not timed); then
 each round runs every case once, so that a change in the machine's speed
-during the benchmark weighs on every case alike.
+during the benchmark weighs on every case alike. Last, a paired measurement of
+single analyses on one-worker clusters gives what the variable costs per
+design, which other load on the machine blurs less than whole sweeps.
 
 Run: ``python benchmarks/bench_sweep.py [--count 8] [--precision 0.1] [--repeat 3]``.
 """
@@ -21,8 +23,6 @@ import argparse
 import contextlib
 import os
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -30,6 +30,7 @@ from typing import Any
 
 from moveability import load_spec
 from moveability.sweep import local_cluster, read_table, run_sweep
+from moveability.sweep.runner import run_chunk
 
 SPEC = Path(__file__).resolve().parent.parent / "examples" / "five-bar-paper.toml"
 
@@ -47,31 +48,34 @@ def timed_sweep(
     return wall, busy, summary["failed"]
 
 
-ONE_PROCESS = """
-import sys, time
-from moveability import analyze, load_spec
-from moveability.sweep import restore_malloc_thresholds
-if sys.argv[1] == "fix":
-    restore_malloc_thresholds()
-spec = load_spec(sys.argv[2])
-analyze(spec, precision=float(sys.argv[3]))
-best = float("inf")
-for _ in range(int(sys.argv[4])):
-    start = time.perf_counter()
-    analyze(spec, precision=float(sys.argv[3]))
-    best = min(best, time.perf_counter() - start)
-print(best)
-"""
+def per_design(spec: dict[str, Any], eps: float, rounds: int = 6) -> dict[str, list[float]]:
+    """Seconds of one analysis on a one-worker LocalCluster, per allocator setting.
 
+    The three clusters run in turn, one task of 5 analyses each per round: a
+    paired comparison that other load on the machine weighs on alike.
+    """
+    from distributed import Client
 
-def one_process(eps: float, trim: bool, fix: bool, repeat: int = 5) -> float:
-    """Best seconds of one analysis of the paper's five-bar in a fresh process."""
-    env = {k: v for k, v in os.environ.items() if k != "MALLOC_TRIM_THRESHOLD_"}
-    if trim:
-        env["MALLOC_TRIM_THRESHOLD_"] = "65536"
-    args = [sys.executable, "-c", ONE_PROCESS, "fix" if fix else "-", str(SPEC), str(eps)]
-    out = subprocess.run([*args, str(repeat)], env=env, capture_output=True, text=True, check=True)
-    return float(out.stdout)
+    settings = {
+        "no MALLOC_TRIM_THRESHOLD_": (False, True),
+        "MALLOC_TRIM_THRESHOLD_, fix": (True, True),
+        "MALLOC_TRIM_THRESHOLD_, no fix": (True, False),
+    }
+    seconds: dict[str, list[float]] = {name: [] for name in settings}
+    chunk = [(spec["parameters"]["L2"],)] * 5
+    with contextlib.ExitStack() as stack:
+        clients = {}
+        for name, (trim, _) in settings.items():
+            cluster = stack.enter_context(local_cluster(n_workers=1, malloc_trim=trim))
+            clients[name] = stack.enter_context(Client(cluster, set_as_default=False))
+        for i in range(rounds + 1):
+            for name, (_, fix) in settings.items():
+                task = clients[name].submit(run_chunk, spec, ["L2"], chunk, eps, fix, pure=False)
+                if i:  # the first round is a warm-up
+                    seconds[name].extend(row["seconds"] for row in task.result())
+                else:
+                    task.result()
+    return seconds
 
 
 def main() -> None:
@@ -128,21 +132,12 @@ def main() -> None:
         f"load average (1 min) before and after the rounds: {load_start[0]:.1f}, {load_end[0]:.1f}"
     )
 
-    print(
-        f"\none analysis of the paper's five-bar at {eps} in a fresh process (best of 5, 3 rounds)"
-    )
-    single = {
-        "default allocator": (False, False),
-        "MALLOC_TRIM_THRESHOLD_=65536": (True, False),
-        "MALLOC_TRIM_THRESHOLD_=65536 + fix": (True, True),
-    }
-    best = {name: float("inf") for name in single}
-    for _ in range(3):
-        for name, (trim, fix) in single.items():
-            best[name] = min(best[name], one_process(eps, trim, fix))
-    base = best["default allocator"]
-    for name, seconds in best.items():
-        print(f"  {name:<36} {seconds:.3f} s  ({seconds / base:.2f} x)")
+    print(f"\none analysis of the paper's five-bar at {eps} on a one-worker LocalCluster")
+    per = per_design(spec, eps)
+    base = min(per["no MALLOC_TRIM_THRESHOLD_"])
+    for name, values in per.items():
+        best, median = min(values), statistics.median(values)
+        print(f"  {name:<32} best {best:.3f} s ({best / base:.2f} x), median {median:.3f} s")
 
 
 if __name__ == "__main__":
