@@ -77,3 +77,20 @@ def test_dask_default_environment_has_the_trim_threshold():
 
         with Client(cluster, set_as_default=False) as client:
             assert set(client.run(os.getenv, "MALLOC_TRIM_THRESHOLD_").values()) == {"65536"}
+
+
+def test_dask_task_failure_is_recorded(tmp_path, monkeypatch):
+    """A task that fails on the worker (not inside an analysis) gives error rows; the sweep ends."""
+    import math
+
+    from moveability.sweep import runner
+
+    # a task function that fails on the worker and is importable there
+    monkeypatch.setattr(runner, "run_chunk", math.hypot)
+    out = tmp_path / "designs.csv"
+    with local_cluster(n_workers=1) as cluster:
+        result = sweep("--scheduler", cluster.scheduler_address, "--out", str(out))
+    assert "6 designs: 6 computed, 0 already in" in result.output and "6 failed" in result.output
+    _, rows = read_table(out)
+    assert len(rows) == 6
+    assert all(row["error"].startswith("TypeError") for row in rows)
