@@ -122,7 +122,9 @@ def sweep_command(
     and error (empty unless the design failed).
 
     Rows are written as designs finish; running the same command again skips
-    the designs already in FILE (failed ones too, unless --retry-errors).
+    the designs already in FILE (failed ones too, unless --retry-errors). FILE
+    does not record the precision: resume with the same one. A progress bar
+    shows on a terminal (log lines with `moveability -v sweep ...`).
     """
     n_jobs = _check_jobs(jobs, scheduler)
     with options.reporting_errors():
