@@ -436,3 +436,12 @@ def test_malloc_fix_runs():
     assert restore_malloc_thresholds() is applied
     if sys.platform.startswith("linux") and platform.libc_ver()[0] == "glibc":
         assert applied is True
+
+
+def test_only_one_number_parameters_vary():
+    spec = {**load_spec(SPEC)}
+    spec["parameters"] = {**spec["parameters"], "L0": [7.0, 7.0]}
+    with pytest.raises(
+        InvalidParameterError, match="invalid --vary L0: expected a parameter given"
+    ):
+        parse_vary("L0=1:2:2", spec)

@@ -52,9 +52,13 @@ class Vary(NamedTuple):
     values: tuple[float, ...]
 
 
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
 def _names(spec: Mapping[str, Any]) -> tuple[list[str], list[str]]:
-    """Varied names the spec allows: its parameters, and the ends of its limited joints."""
-    parameters = list(spec["parameters"])
+    """Varied names the spec allows: its one-number parameters, the ends of its limited joints."""
+    parameters = [name for name, value in spec["parameters"].items() if _is_number(value)]
     ends = [
         f"{joint}.{end}"
         for joint, limit in spec["limits"].items()
@@ -74,6 +78,7 @@ def parse_vary(text: str, spec: Mapping[str, Any]) -> Vary:
         ``JOINT.min`` / ``JOINT.max`` for a joint with a limit; ``START`` and
         ``STOP`` are numbers (for a limit end, also ``pi`` expressions read by
         :func:`moveability.spec.parse_angle`); ``COUNT`` is an integer >= 1.
+        Only parameters given by one number can be varied.
     spec : mapping
         A spec as returned by :func:`moveability.spec.load_spec`.
 
@@ -108,6 +113,10 @@ def parse_vary(text: str, spec: Mapping[str, Any]) -> Vary:
         raise InvalidParameterError("--vary", _SYNTAX, text)
     parameters, ends = _names(spec)
     if name not in parameters and name not in ends:
+        if name in spec["parameters"]:
+            raise InvalidParameterError(
+                f"--vary {name}", "a parameter given by one number", spec["parameters"][name]
+            )
         joint, dot, end = name.partition(".")
         if dot and spec["limits"].get(joint) == UNLIMITED and end in LIMIT_ENDS:
             raise InvalidParameterError(

@@ -113,7 +113,8 @@ def summarize(result: Any) -> Row:
     >>> row["regions"], row["n_connected"], round(row["largest_share"], 3)
     (2, False, 0.928)
     """
-    inner, outer = result.workspace["area"]
+    # one entry, keyed by the measure's name (area in the plane)
+    ((inner, outer),) = result.workspace.values()
     regions = result.regions
     share = None
     if regions and outer > 0:
