@@ -233,11 +233,18 @@ def apply_design(
 
 
 def varied_unit(name: str) -> str:
-    """The unit of a varied name: ``rad`` for a limit end, the spec's length unit otherwise.
+    """The unit of a varied name, for labels.
+
+    Parameters are lengths; a limit end is in radians for a revolute joint
+    (named ``theta...``, as in every spec of the package) and in the joint's
+    own units otherwise (a prismatic joint's length).
 
     Examples
     --------
-    >>> varied_unit("theta1.max"), varied_unit("L1")
-    ('rad', 'length')
+    >>> varied_unit("theta1.max"), varied_unit("L1"), varied_unit("rho1.min")
+    ('rad', 'length', 'joint units')
     """
-    return "rad" if "." in name else "length"
+    joint, dot, _ = name.partition(".")
+    if not dot:
+        return "length"
+    return "rad" if joint.startswith("theta") else "joint units"

@@ -119,7 +119,7 @@ def _edges(values: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def _label(name: str) -> str:
     unit = varied_unit(name)
-    return f"{name} ({'rad' if unit == 'rad' else 'length units of the spec'})"
+    return f"{name} ({'length units of the spec' if unit == 'length' else unit})"
 
 
 def plot_sweep_map(
