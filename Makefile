@@ -27,6 +27,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_tree.py
 	$(PY) benchmarks/bench_analysis.py
 	$(PY) benchmarks/bench_mechanisms.py
+	$(PY) benchmarks/bench_sweep.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache .hypothesis

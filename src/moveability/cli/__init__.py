@@ -2,7 +2,7 @@
 
 One module per command (:mod:`.regions`, :mod:`.locate`, :mod:`.feasible`,
 :mod:`.plan`, :mod:`.plot`,
-:mod:`.report`, :mod:`.export`),
+:mod:`.report`, :mod:`.export`, :mod:`.sweep`),
 shared options in :mod:`.options`. Results go to stdout (a summary, or JSON
 with ``--json -``), logs to stderr. Bad input exits with status 2 and the one
 line ``Error: <message>`` on stderr.
@@ -30,6 +30,7 @@ from .plan import plan_command
 from .plot import plot_command
 from .regions import regions_command
 from .report import report_command
+from .sweep import sweep_command
 
 __all__ = ["main"]
 
@@ -52,3 +53,4 @@ main.add_command(plan_command)
 main.add_command(plot_command)
 main.add_command(report_command)
 main.add_command(export_command)
+main.add_command(sweep_command)
