@@ -404,19 +404,27 @@ def _parameter(value: object, key: str, kind: str, schema: MechanismSchema) -> A
     raise ValueError(f"unknown parameter kind {kind!r}")
 
 
-def _limits(
-    value: object, mechanism: str, schema: MechanismSchema
-) -> dict[str, tuple[float, float] | str]:
-    if schema.joint_kind != "angle":
-        return _strokes(value, mechanism, schema)
+def _limit_table(
+    value: object, mechanism: str, schema: MechanismSchema, allowed: str
+) -> Mapping[str, Any]:
+    """The ``[limits]`` table, with no joint the mechanism does not have."""
     joints = ", ".join(schema.joints)
-    allowed = f'[lo, hi] in radians with lo < hi, or "{UNLIMITED}"'
     table = _table(value, "limits", f"a table giving {joints}, each {allowed}")
     for key in table:
         if key not in schema.joints:
             raise SpecError(
                 f"limits.{key}", f"no such joint ({mechanism} has {joints})", table[key]
             )
+    return table
+
+
+def _limits(
+    value: object, mechanism: str, schema: MechanismSchema
+) -> dict[str, tuple[float, float] | str]:
+    if schema.joint_kind != "angle":
+        return _strokes(value, mechanism, schema)
+    allowed = f'[lo, hi] in radians with lo < hi, or "{UNLIMITED}"'
+    table = _limit_table(value, mechanism, schema, allowed)
     out: dict[str, tuple[float, float] | str] = {}
     for joint in schema.joints:
         key = f"limits.{joint}"
@@ -446,15 +454,9 @@ def _strokes(
     value: object, mechanism: str, schema: MechanismSchema
 ) -> dict[str, tuple[float, float] | str]:
     """Limits of prismatic joints: finite strokes ``[lo, hi]`` (never unlimited)."""
-    joints = ", ".join(schema.joints)
     distance = schema.joint_kind == "distance"
     allowed = "[lo, hi] with " + ("0 <= lo < hi" if distance else "lo < hi") + ", finite"
-    table = _table(value, "limits", f"a table giving {joints}, each {allowed}")
-    for key in table:
-        if key not in schema.joints:
-            raise SpecError(
-                f"limits.{key}", f"no such joint ({mechanism} has {joints})", table[key]
-            )
+    table = _limit_table(value, mechanism, schema, allowed)
     out: dict[str, tuple[float, float] | str] = {}
     for joint in schema.joints:
         key = f"limits.{joint}"
