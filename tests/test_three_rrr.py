@@ -10,8 +10,9 @@ import pytest
 
 from moveability import analyze
 from moveability.limits import JointLimit
-from moveability.mechanisms.three_rrr import ThreeRRR, from_spec_mapping
-from moveability.spec import SpecError
+from moveability.mechanisms import from_spec
+from moveability.mechanisms.three_rrr import ThreeRRR
+from moveability.spec import SpecError, load_spec
 
 PRECISION = 0.75
 
@@ -62,13 +63,13 @@ def test_spec_round_trip_and_errors():
     spec = m.to_spec()
     assert spec["mechanism"] == "3-RRR"
     assert spec["limits"]["theta2"] == "unlimited"
-    assert from_spec_mapping(spec).to_spec() == spec
+    assert from_spec(load_spec(spec)).to_spec() == spec
     bad = {**spec, "limits": {"theta1": [0, "pi"], "theta2": "unlimited"}}
     with pytest.raises(SpecError, match=r"limits\.theta3"):
-        from_spec_mapping(bad)
+        from_spec(load_spec(bad))
     bad = {**spec, "parameters": {**spec["parameters"], "proximal": [6, -1, 6]}}
     with pytest.raises(SpecError, match=r"parameters\.proximal"):
-        from_spec_mapping(bad)
+        from_spec(load_spec(bad))
     assert "ThreeRRR" in repr(m)
 
 

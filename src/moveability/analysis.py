@@ -139,7 +139,7 @@ def analyze(
 
         mechanism = from_spec(load_spec(mechanism))
     eps = _check_precision(precision, len(mechanism.pose_names))
-    lo, hi = mechanism.bounds
+    lo, hi = mechanism.pose_box()
     depths = _depths(lo, hi, eps)
 
     def classify(cell_lo: NDArray[np.float64], cell_hi: NDArray[np.float64]) -> NDArray[np.uint8]:

@@ -28,6 +28,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
 
@@ -43,9 +44,12 @@ __all__ = [
     "interval_det",
     "round_down",
     "round_up",
+    "three_points",
 ]
 
 REACH_OUT, REGULAR, FOLD_OUTER, FOLD_INNER, REACH_UNKNOWN = 0, 1, 2, 3, 4
+
+_TWO_PI_UP = float(np.nextafter(2.0 * np.pi, np.inf))  # above the true 2 pi
 
 Array = NDArray[np.float64]
 
@@ -98,6 +102,23 @@ class Leg(Protocol):
     def reach(self, lo: Array, hi: Array) -> LegReach: ...
 
 
+def three_points(value: object, name: str) -> tuple[tuple[float, float], ...]:
+    """Three points ``[x, y]`` with finite coordinates (a base or a platform triangle).
+
+    Examples
+    --------
+    >>> three_points([[0, 0], [1, 0], [0, 2]], "parameters.base")
+    ((0.0, 0.0), (1.0, 0.0), (0.0, 2.0))
+    """
+    try:
+        pts = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(name, "three points [x, y]", value) from None
+    if pts.shape != (3, 2) or not np.isfinite(pts).all():
+        raise InvalidParameterError(name, "three points [x, y] with finite coordinates", value)
+    return tuple((float(p[0]), float(p[1])) for p in pts)
+
+
 def round_up(value: float) -> float:
     """The next float above ``value``: a sum or product rounded outwards."""
     return float(np.nextafter(value, np.inf))
@@ -148,19 +169,29 @@ class Mechanism:
     limits: tuple[JointLimit, ...]
     #: box of poses holding the workspace: (lo, hi)
     bounds: tuple[Array, Array]
-    #: orientation angles that turn freely (radians); their bounds span a little
-    #: more than [-pi, pi], so that the leaves cover every angle
+    #: orientation angles that turn freely (radians); their bounds span one turn
     periodic_axes: tuple[int, ...] = ()
 
+    def pose_box(self) -> tuple[Array, Array]:
+        """The box the analysis subdivides: the bounds, with each periodic axis
+        widened to a little more than one turn (the float 2 pi is short of it), so
+        that the leaves cover every angle."""
+        lo = np.array(self.bounds[0], dtype=np.float64)
+        hi = np.array(self.bounds[1], dtype=np.float64)
+        for axis in self.periodic_axes:
+            hi[axis] = round_up(lo[axis] + _TWO_PI_UP)
+        return lo, hi
+
     def wrap_poses(self, points: Array) -> Array:
-        """Poses with their periodic angles brought into ``[-pi, pi)``."""
+        """Poses with their periodic angles brought into ``[lo, lo + 2 pi)`` of the bounds."""
         if not self.periodic_axes:
             return points
         out = np.array(points, dtype=np.float64, copy=True)
         for axis in self.periodic_axes:
+            lo = float(self.bounds[0][axis])
             v = out[:, axis]
-            inside = (v >= -np.pi) & (v < np.pi)  # left as given, to the last bit
-            out[:, axis] = np.where(inside, v, np.mod(v + np.pi, 2.0 * np.pi) - np.pi)
+            inside = (v >= lo) & (v < lo + 2.0 * np.pi)  # left as given, to the last bit
+            out[:, axis] = np.where(inside, v, lo + np.mod(v - lo, 2.0 * np.pi))
         return out
 
     @property

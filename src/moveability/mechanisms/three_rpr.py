@@ -24,7 +24,16 @@ from .. import intervals as iv
 from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
-from .base import REACH_UNKNOWN, REGULAR, LegReach, Mechanism, round_down, round_up
+from .base import (
+    REACH_UNKNOWN,
+    REGULAR,
+    LegReach,
+    Mechanism,
+    interval_det,
+    round_down,
+    round_up,
+    three_points,
+)
 
 __all__ = ["RPRLeg", "ThreeRPR"]
 
@@ -135,16 +144,6 @@ class RPRLeg:
         raise ValueError("an RPR leg has one branch: it never changes posture")
 
 
-def _points(value: object, name: str) -> tuple[tuple[float, float], ...]:
-    try:
-        pts = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(name, "three points [x, y]", value) from None
-    if pts.shape != (3, 2) or not np.isfinite(pts).all():
-        raise InvalidParameterError(name, "three points [x, y] with finite coordinates", value)
-    return tuple((float(p[0]), float(p[1])) for p in pts)
-
-
 class ThreeRPR(Mechanism):
     """The planar 3-RPR parallel manipulator.
 
@@ -177,8 +176,8 @@ class ThreeRPR(Mechanism):
         platform: object,
         limits: tuple[JointLimit, JointLimit, JointLimit],
     ) -> None:
-        self.base = _points(base, "parameters.base")
-        self.platform = _points(platform, "parameters.platform")
+        self.base = three_points(base, "parameters.base")
+        self.platform = three_points(platform, "parameters.platform")
         if len(limits) != 3 or not all(lim.prismatic for lim in limits):
             raise InvalidParameterError("limits", "three prismatic strokes", limits)
         for i, lim in enumerate(limits):
@@ -204,29 +203,27 @@ class ThreeRPR(Mechanism):
                 "limits", "strokes long enough for the three legs to meet", self._strokes()
             )
         pad = 1e-3 * (hi - lo) + 4 * np.spacing(np.abs(np.concatenate([lo, hi])).max())
-        # a little more than one turn: the leaves cover every angle (the float pi is short)
-        turn = round_up(np.pi)
         self.bounds = (
-            np.array([lo[0] - pad[0], lo[1] - pad[1], -turn]),
-            np.array([hi[0] + pad[0], hi[1] + pad[1], turn]),
+            np.array([lo[0] - pad[0], lo[1] - pad[1], -np.pi]),
+            np.array([hi[0] + pad[0], hi[1] + pad[1], np.pi]),
         )
 
     def det_a_boxes(self, lo: Array, hi: Array, angles: list[Interval]) -> Interval:
         """Enclosure of det A over boxes: the rows depend on the pose only, so the
         mean-value form ``D(c) + sum_j dD/dx_j(box) (x_j - c_j)`` about the centre
         ``c`` encloses it too; the narrower of the two (intersected) is kept."""
-        natural = super().det_a_boxes(lo, hi, angles)
-        mid = 0.5 * (lo + hi)
-        at_mid = _det3(*[leg.a_row_boxes(mid, mid, angles[i]) for i, leg in enumerate(self.legs)])
         rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.legs)]
+        natural = interval_det(rows)
+        mid = 0.5 * (lo + hi)
+        total = interval_det(
+            [leg.a_row_boxes(mid, mid, angles[i]) for i, leg in enumerate(self.legs)]
+        )
         grads = [leg.a_row_derivatives(lo, hi) for leg in self.rpr_legs]
-        total = at_mid
         for axis in range(3):
-            d = (
-                _det3(grads[0][axis], rows[1], rows[2])
-                + _det3(rows[0], grads[1][axis], rows[2])
-                + _det3(rows[0], rows[1], grads[2][axis])
-            )
+            # d/dx_j of the determinant: one row differentiated at a time
+            d = interval_det([grads[0][axis], rows[1], rows[2]])
+            d = d + interval_det([rows[0], grads[1][axis], rows[2]])
+            d = d + interval_det([rows[0], rows[1], grads[2][axis]])
             total = total + d * (Interval(lo[:, axis], hi[:, axis]) - mid[:, axis])
         return Interval(np.maximum(natural.lo, total.lo), np.minimum(natural.hi, total.hi))
 
@@ -246,12 +243,3 @@ class ThreeRPR(Mechanism):
 
     def __repr__(self) -> str:
         return f"ThreeRPR(base={self.base}, platform={self.platform}, limits={self._strokes()})"
-
-
-def _det3(r0: list[Interval], r1: list[Interval], r2: list[Interval]) -> Interval:
-    """Enclosure of a 3x3 determinant given by rows (cofactor expansion on row 0)."""
-    return (
-        r0[0] * (r1[1] * r2[2] - r1[2] * r2[1])
-        - r0[1] * (r1[0] * r2[2] - r1[2] * r2[0])
-        + r0[2] * (r1[0] * r2[1] - r1[1] * r2[0])
-    )

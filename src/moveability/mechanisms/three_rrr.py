@@ -10,7 +10,7 @@ length ``l2_i`` to the platform point ``B_i = P + R(phi) b_i``. The pose is
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -18,11 +18,11 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
 from ..limits import JointLimit
-from .base import Mechanism
+from .base import Mechanism, three_points
 from .constraint_leg import ConstraintLeg
 from .expressions import cos, sin
 
-__all__ = ["ThreeRRR", "from_spec_mapping"]
+__all__ = ["ThreeRRR"]
 
 Array = NDArray[np.float64]
 _JOINTS = ("theta1", "theta2", "theta3")
@@ -127,15 +127,6 @@ class ThreeRRR(Mechanism):
         limits: Sequence[JointLimit] | None = None,
         bounds: tuple[Sequence[float], Sequence[float]] | None = None,
     ) -> None:
-        def points(value: Any, key: str) -> tuple[tuple[float, float], ...]:
-            try:
-                arr = np.asarray(value, dtype=np.float64)
-            except (TypeError, ValueError):
-                raise InvalidParameterError(key, "three points (x, y)", value) from None
-            if arr.shape != (3, 2) or not np.isfinite(arr).all():
-                raise InvalidParameterError(key, "three finite points (x, y)", value)
-            return tuple((float(p[0]), float(p[1])) for p in arr)
-
         def lengths(value: Any, key: str) -> tuple[float, ...]:
             try:
                 arr = np.asarray(value, dtype=np.float64)
@@ -145,8 +136,8 @@ class ThreeRRR(Mechanism):
                 raise InvalidParameterError(key, "three positive lengths", value)
             return tuple(float(v) for v in arr)
 
-        self.base = points(base, "parameters.base")
-        self.platform = points(platform, "parameters.platform")
+        self.base = three_points(base, "parameters.base")
+        self.platform = three_points(platform, "parameters.platform")
         self.proximal = lengths(proximal, "parameters.proximal")
         self.distal = lengths(distal, "parameters.distal")
         if limits is None:
@@ -214,45 +205,3 @@ class ThreeRRR(Mechanism):
             f"platform={[list(p) for p in self.platform]}, proximal={list(self.proximal)}, "
             f"distal={list(self.distal)}, limits={self.limits})"
         )
-
-
-def from_spec_mapping(spec: Mapping[str, Any]) -> ThreeRRR:
-    """A 3-RRR from its spec mapping (see :meth:`ThreeRRR.to_spec`).
-
-    Examples
-    --------
-    >>> m = ThreeRRR.default()
-    >>> from_spec_mapping(m.to_spec()).to_spec() == m.to_spec()
-    True
-    """
-    from ..spec import SpecError, parse_angle
-
-    params = spec.get("parameters", {})
-    if not isinstance(params, Mapping):
-        raise SpecError("parameters", "a table giving base, platform, proximal, distal", params)
-    for key in ("base", "platform", "proximal", "distal"):
-        if key not in params:
-            raise SpecError(f"parameters.{key}", "a value", "nothing")
-    limits_spec = spec.get("limits", {})
-    limits = []
-    for joint in _JOINTS:
-        key = f"limits.{joint}"
-        value = limits_spec.get(joint) if isinstance(limits_spec, Mapping) else None
-        if value is None:
-            raise SpecError(key, '[lo, hi] or "unlimited"', "nothing")
-        if isinstance(value, str) and value.strip().lower() == "unlimited":
-            limits.append(JointLimit.unlimited())
-            continue
-        if isinstance(value, str) or not isinstance(value, Sequence) or len(value) != 2:
-            raise SpecError(key, '[lo, hi] or "unlimited"', value)
-        lo, hi = parse_angle(value[0], f"{key}[0]"), parse_angle(value[1], f"{key}[1]")
-        try:
-            limits.append(JointLimit(lo, hi))
-        except InvalidParameterError as exc:
-            raise SpecError(key, exc.allowed, exc.received) from None
-    try:
-        return ThreeRRR(
-            params["base"], params["platform"], params["proximal"], params["distal"], limits
-        )
-    except InvalidParameterError as exc:
-        raise SpecError(exc.name, exc.allowed, exc.received) from None
