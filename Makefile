@@ -28,6 +28,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_analysis.py
 	$(PY) benchmarks/bench_mechanisms.py
 	$(PY) benchmarks/bench_sweep.py
+	$(PY) benchmarks/bench_counts.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache .hypothesis

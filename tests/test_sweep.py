@@ -75,16 +75,15 @@ def test_rows_match_single_analyses(swept):
             "parameters": {"L0": 7, "L1": 8, "L2": l2, "L3": 8, "L4": 5},
             "limits": {"theta1": [0.0, t_max], "theta2": [0.0, "pi"]},
         }
-        direct = analyze(spec, precision=float(EPS))
+        direct = analyze(spec, precision=float(EPS), resolve=True)
         inner, outer = direct.workspace["area"]
         assert row["error"] is None
         assert row["workspace_inner"] == inner
         assert row["workspace_outer"] == outer
         assert row["n_connected"] is direct.n_connected
-        if direct.undecided["components"] == 0:
-            assert row["regions"] == len(direct.regions)
-        else:
-            assert row["regions"] is None
+        # the count where it is proved, and its bounds
+        assert row["regions"] == direct.n_regions
+        assert (row["regions_at_least"], row["regions_at_most"]) == direct.count
         largest = max(r.area[0] for r in direct.regions)
         assert row["largest_share"] == largest / outer
         assert 0 < row["largest_share"] <= 1
@@ -110,8 +109,8 @@ def test_paper_design_row(tmp_path):
     out = tmp_path / "paper.csv"
     assert sweep("--vary", "L2=5:5:1", "--out", str(out)).exit_code == 0
     (row,) = read_table(out)[1]
-    direct = analyze(load_spec(SPEC), precision=0.1)
-    assert row["regions"] == 2 == len(direct.regions)
+    direct = analyze(load_spec(SPEC), precision=0.1, resolve=True)
+    assert row["regions"] == 2 == direct.n_regions
     assert row["n_connected"] is False
     assert row["workspace_outer"] == direct.workspace["area"][1]
 

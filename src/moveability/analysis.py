@@ -18,20 +18,38 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import InvalidParameterError, ResolutionError
+from .flows import attached_nodes, dead_or_certified, face_neighbours, flow_conditions
 from .keys import MAX_KEY_BITS
 from .measurement import leaf_volumes, locate
 from .mechanisms import Mechanism, from_spec
-from .mechanisms.base import REGULAR
+from .mechanisms.base import FOLD_INNER, FOLD_OUTER, REGULAR
 from .regions import RegionGraph, region_graph
-from .sheets import SheetTable, classify_sheets
+from .sheets import SheetTable, classify_sheets, stack_tables
 from .status import BOUNDARY, IN, OUT
 from .topology import adjacency
 from .tree import HyperTree, read_archive
 
-__all__ = ["Analysis", "Region", "analyze", "load_analysis"]
+__all__ = [
+    "RESOLVE_GROWTH",
+    "RESOLVE_LEVELS",
+    "RESOLVE_ROUND",
+    "Analysis",
+    "Region",
+    "analyze",
+    "count_text",
+    "load_analysis",
+    "resolve_analysis",
+]
 
 Progress = Callable[[int, int, int], object]
 _FORMAT = "moveability.Analysis"
+#: levels below the precision that :func:`analyze` may refine to settle the count
+RESOLVE_LEVELS = 12
+#: leaves the resolution may add, as a multiple of the leaves of the plain pass
+#: (at least 32768)
+RESOLVE_GROWTH = 2.0
+#: leaves split in one round of the resolution at most (those with open nodes first)
+RESOLVE_ROUND = 1 << 13
 
 
 def _tri(value: bool | None) -> str:
@@ -107,6 +125,9 @@ def analyze(
     max_leaves: int = 1 << 23,
     progress: Progress | None = None,
     generalized_aspects: bool = False,
+    resolve: bool = False,
+    resolve_levels: int = RESOLVE_LEVELS,
+    resolve_growth: float = RESOLVE_GROWTH,
 ) -> Analysis:
     """Regions of feasible point-to-point motions of a mechanism.
 
@@ -125,6 +146,17 @@ def analyze(
         Forbid serial singularities as well (det A != 0 and det B != 0): the
         regions are then the generalized aspects, in which the posture never
         changes.
+    resolve : bool, optional
+        After the pass at the precision, refine below it, one level a round,
+        only the leaves that keep the count of regions open (see
+        :func:`resolve_analysis`); False (the default) keeps the plain pass.
+    resolve_levels : int, optional
+        Levels below the precision that the resolution may reach.
+    resolve_growth : float, optional
+        Leaves the resolution may add, as a multiple of the leaves of the plain
+        pass (at least 32768), within ``max_leaves``; it splits at most
+        ``RESOLVE_ROUND`` leaves a round. With ``resolve_levels``, a
+        deterministic budget.
 
     Examples
     --------
@@ -141,11 +173,17 @@ def analyze(
     eps = _check_precision(precision, len(mechanism.pose_names))
     lo, hi = mechanism.pose_box()
     depths = _depths(lo, hi, eps)
+    if isinstance(resolve_levels, bool) or not isinstance(resolve_levels, int | np.integer):
+        raise InvalidParameterError("resolve_levels", "a whole number >= 0", resolve_levels)
+    if resolve_levels < 0:
+        raise InvalidParameterError("resolve_levels", "a whole number >= 0", resolve_levels)
+    if not (np.isfinite(resolve_growth) and resolve_growth >= 0):
+        raise InvalidParameterError("resolve_growth", "a number >= 0", resolve_growth)
+    # the levels below the precision must fit in the keys too
+    extra = min(int(resolve_levels), (MAX_KEY_BITS - sum(depths)) // len(depths)) if resolve else 0
 
     def classify(cell_lo: NDArray[np.float64], cell_hi: NDArray[np.float64]) -> NDArray[np.uint8]:
-        table = classify_sheets(mechanism, cell_lo, cell_hi)
-        dead = (table.status == OUT).all(axis=1)
-        return np.where(dead, OUT, np.where(table.decided(), IN, BOUNDARY)).astype(np.uint8)
+        return classify_sheets(mechanism, cell_lo, cell_hi).statuses()
 
     n_levels = max(depths)
 
@@ -164,11 +202,12 @@ def analyze(
             lo,
             hi,
             classify,
-            max_depth=depths,
+            max_depth=[d + extra for d in depths],
             periodic=mechanism.periodic_axes,
             max_leaves=max_leaves,
             progress=watch,
             merge=False,
+            stop_level=n_levels,
         )
     except ResolutionError:
         raise ResolutionError(
@@ -176,7 +215,115 @@ def analyze(
             f"a precision whose tree holds at most max_leaves={max_leaves} leaves",
             precision,
         ) from None
-    return Analysis(mechanism, _as_given(eps), tree, generalized_aspects=generalized_aspects)
+    result = Analysis(mechanism, _as_given(eps), tree, generalized_aspects=generalized_aspects)
+    if extra:
+        budget = len(tree) + max(int(resolve_growth * len(tree)), 1 << 15)
+        result = resolve_analysis(result, max_leaves=min(max_leaves, budget), progress=progress)
+    return result
+
+
+def resolve_analysis(
+    result: Analysis, *, max_leaves: int = 1 << 23, progress: Progress | None = None
+) -> Analysis:
+    """Refine, below the precision, the leaves that keep the count of regions open.
+
+    Each round splits once the leaves of :meth:`Analysis.open_leaves` that are
+    above the tree's maximal level, classifies only their children and builds
+    the analysis again, until nothing is open, the leaves reach the maximal
+    level, or the tree would hold more than ``max_leaves`` leaves. The cost
+    follows the open part, not the box.
+    """
+    mechanism = result.mechanism
+    while True:
+        tree = result.tree
+        below = tree.levels < tree.layout.n_levels
+        hiding = result.open_nodes.any(axis=(0, 2)) & below
+        mask = result.open_leaves() & below
+        if int(mask.sum()) > RESOLVE_ROUND:
+            # the leaves where a region may hide first, then the necks, coarsest first
+            extra = np.flatnonzero(mask & ~hiding)
+            extra = extra[np.argsort(tree.levels[extra], kind="stable")]
+            room = max(RESOLVE_ROUND - int(hiding.sum()), 0)
+            mask = hiding.copy()
+            mask[extra[:room]] = True
+        # what the budget leaves room for: the first leaves of the order above
+        room = (max_leaves - len(tree)) // ((1 << tree.ndim) - 1)
+        if int(mask.sum()) > room:
+            chosen = np.concatenate(
+                [np.flatnonzero(mask & hiding), np.flatnonzero(mask & ~hiding)]
+            )[: max(room, 0)]
+            mask = np.zeros(len(tree), dtype=bool)
+            mask[chosen] = True
+        n_split = int(mask.sum())
+        if not n_split:
+            return result
+        children: list[SheetTable] = []
+
+        def classify(
+            lo: NDArray[np.float64], hi: NDArray[np.float64], found: list[SheetTable] = children
+        ) -> NDArray[np.uint8]:
+            found.append(classify_sheets(mechanism, lo, hi))
+            return found[-1].statuses()
+
+        finer = tree.refine(mask, classify)
+        # kept leaves stay in order among the new ones; children come in key order (a
+        # child's key lies in its parent's range, apart from every kept leaf's)
+        is_child = ~np.isin(finer.keys, tree.keys[~mask])
+        table = stack_tables([result.table.take(np.flatnonzero(~mask)), children[0]])
+        order = np.empty(len(finer), dtype=np.intp)
+        order[~is_child] = np.arange(int((~is_child).sum()))
+        order[is_child] = int((~is_child).sum()) + np.arange(int(is_child.sum()))
+        if progress is not None:
+            progress(int(finer.levels.max()), n_split, len(finer))
+        old_index = np.full(len(finer), -1, dtype=np.intp)
+        old_index[~is_child] = np.flatnonzero(~mask)
+        result = Analysis(
+            mechanism,
+            result.precision,
+            finer,
+            generalized_aspects=result.generalized_aspects,
+            table=table.take(order),
+            flows_of=(result, old_index),
+        )
+
+
+def _reachable_contact(
+    mechanism: Mechanism, leaves: Any, table: SheetTable, pairs: NDArray[np.intp]
+) -> NDArray[np.bool_]:
+    """Per pair of touching leaves that both hold a certified fold group: whether
+    their common boundary holds a pose that every leg reaches (every leg regular
+    there but at most one, which certainly holds reachable poses there)."""
+    out = np.zeros(pairs.shape[0], dtype=bool)
+    both = table.group[pairs[:, 0]].any(axis=1) & table.group[pairs[:, 1]].any(axis=1)
+    idx = np.flatnonzero(both)
+    if not idx.size:
+        return out
+    a, b = pairs[idx, 0], pairs[idx, 1]
+    lo = np.maximum(leaves.lo[a], leaves.lo[b])
+    hi = np.minimum(leaves.hi[a], leaves.hi[b])
+    # leaves touching across a periodic seam have no common box in coordinates
+    real = (lo <= hi).all(axis=1)
+    status = np.stack([leg.reach(lo, hi).status for leg in mechanism.legs], axis=1)
+    regular = status == REGULAR
+    folds = (status == FOLD_OUTER) | (status == FOLD_INNER)
+    out[idx] = real & (regular | folds).all(axis=1) & ((~regular).sum(axis=1) <= 1)
+    return out
+
+
+def count_text(at_least: int, at_most: int | None, noun: str = "region") -> str:
+    """A count of regions in words: definite only when proved.
+
+    Examples
+    --------
+    >>> count_text(4, 4), count_text(2, 5), count_text(2, None)
+    ('4 regions', 'at least 2, at most 5 regions', 'at least 2 regions (no upper bound proved)')
+    """
+    plural = f"{noun}s"
+    if at_least == at_most:
+        return f"{at_least} {noun if at_least == 1 else plural}"
+    if at_most is None:
+        return f"at least {at_least} {plural} (no upper bound proved)"
+    return f"at least {at_least}, at most {at_most} {plural}"
 
 
 class Analysis:
@@ -192,6 +339,8 @@ class Analysis:
         precision: float | Sequence[float],
         tree: HyperTree,
         generalized_aspects: bool = False,
+        table: SheetTable | None = None,
+        flows_of: tuple[Analysis, NDArray[np.intp]] | None = None,
     ) -> None:
         self.mechanism = mechanism
         self.generalized_aspects = bool(generalized_aspects)
@@ -201,10 +350,13 @@ class Analysis:
         self.precision = _as_given(self.precisions)
         self.tree = tree
         leaves = tree.leaves()
-        self.table: SheetTable = classify_sheets(mechanism, leaves.lo, leaves.hi)
+        self.table: SheetTable = (
+            classify_sheets(mechanism, leaves.lo, leaves.hi) if table is None else table
+        )
         self.areas = leaf_volumes(tree)
         live = np.flatnonzero(tree.status != OUT)
         pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=tree.ndim)
+        self._pairs = pairs
         self._n_live = live.size
         self.graph: RegionGraph = region_graph(
             self.table,
@@ -212,7 +364,9 @@ class Analysis:
             mechanism.postures,
             cross_serial=not self.generalized_aspects,
             limits=mechanism.limits,
+            reachable_contact=_reachable_contact(mechanism, leaves, self.table, pairs),
         )
+        self._attach(None if flows_of is None else (flows_of[0]._flows, flows_of[1]))
         self._resolve()
 
     @property
@@ -221,6 +375,95 @@ class Analysis:
         return ", ".join(f"{v:g}" for v in np.atleast_1d(self.precision))
 
     # ------------------------------------------------------------ regions
+    def _attach(self, reuse: tuple[Any, NDArray[np.intp]] | None = None) -> None:
+        """Nodes whose every valid configuration joins a certified sheet (see
+        :mod:`moveability.flows`); the others, alive and uncertified, are *open*:
+        a region might hide there. ``reuse`` carries the flows of an analysis
+        this one refines, with the old index of each leaf (-1 for new ones)."""
+        t = self.table
+        cross = not self.generalized_aspects
+        done = [dead_or_certified(t, s, cross) for s in (1, -1)]
+        nodes = np.argwhere(~done[0] | ~done[1])
+        n, n_post = t.status.shape
+        leaves = self.tree.leaves()
+        if reuse is None:
+            bits, exists, faces = flow_conditions(
+                self.mechanism, leaves.lo, leaves.hi, t, nodes, cross
+            )
+        else:
+            (old_nodes, old_bits, old_exists, old_faces, old_n), old_index = reuse
+            old_row = np.full((old_n, n_post), -1, dtype=np.int64)
+            old_row[old_nodes[:, 0], old_nodes[:, 1]] = np.arange(old_nodes.shape[0])
+            source = np.where(
+                old_index[nodes[:, 0]] >= 0,
+                old_row[np.maximum(old_index[nodes[:, 0]], 0), nodes[:, 1]],
+                -1,
+            )
+            fresh = np.flatnonzero(source < 0)
+            new_bits, new_exists, new_faces = flow_conditions(
+                self.mechanism, leaves.lo, leaves.hi, t, nodes[fresh], cross
+            )
+            kept = source >= 0
+            bits = np.zeros((2, nodes.shape[0], old_bits.shape[2]), dtype=np.uint64)
+            exists = np.zeros((nodes.shape[0], old_exists.shape[1]), dtype=bool)
+            faces = np.zeros((old_faces.shape[0], nodes.shape[0]), dtype=np.uint8)
+            bits[:, kept], exists[kept], faces[:, kept] = (
+                old_bits[:, source[kept]],
+                old_exists[source[kept]],
+                old_faces[:, source[kept]],
+            )
+            bits[:, fresh], exists[fresh], faces[:, fresh] = new_bits, new_exists, new_faces
+        self._flows = (nodes, bits, exists, faces, n)
+        neighbours = face_neighbours(self.tree)
+        #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1)
+        self.open_nodes = np.zeros((2, n, n_post), dtype=bool)
+        for row in (0, 1):
+            attached = attached_nodes(done[row], nodes, bits[row], exists, faces, neighbours)
+            self.open_nodes[row] = ~done[row] & ~attached
+
+    def open_leaves(self, hops: int = 2) -> NDArray[np.bool_]:
+        """Leaves that keep the count of regions open.
+
+        Those holding an open node (a region might hide there), and the *necks*:
+        in a possible component that holds several certified parts, the leaves
+        with uncertified nodes of that component within ``hops`` touching leaves
+        of its certified parts other than the largest (refined, those parts join
+        the largest there, or the component splits).
+        """
+        mask = np.asarray(self.open_nodes.any(axis=(0, 2)), dtype=bool)
+        g, t = self.graph, self.table
+        n, n_post = t.status.shape
+        certified = (t.status == IN) | t.group
+        sizes = np.bincount(g.certain[g.certain >= 0], minlength=g.certain_sign.size)
+        a, b = self._pairs[:, 0], self._pairs[:, 1]
+        for row in (0, 1):
+            sign = (1, -1)[row]
+            of_sign = np.flatnonzero(g.certain_sign == sign)
+            owner = self._certain_to_possible[of_sign]
+            if np.bincount(owner, minlength=g.n_possible[row]).max(initial=0) < 2:
+                continue
+            # the largest certified part of each possible component stays as it is
+            largest = np.full(g.n_possible[row], -1, dtype=np.int64)
+            order = np.lexsort((sizes[of_sign], owner))
+            largest[owner[order]] = of_sign[order]
+            small = np.zeros(g.certain_sign.size, dtype=bool)
+            small[of_sign] = largest[owner] != of_sign
+            labels = g.possible[row].reshape(n, n_post, g.slots)
+            crowded = np.zeros(g.n_possible[row], dtype=bool)
+            crowded[owner[small[of_sign]]] = True
+            in_crowded = (crowded[np.maximum(labels, 0)] & (labels >= 0)).any(axis=2)
+            gap = np.asarray((in_crowded & ~certified).any(axis=1), dtype=bool)
+            near = np.asarray(
+                (small[np.maximum(g.certain, 0)] & (g.certain >= 0)).any(axis=1), dtype=bool
+            )
+            for _ in range(hops):
+                step = near.copy()
+                step[b[near[a] & gap[b]]] = True
+                step[a[near[b] & gap[a]]] = True
+                near = step
+            mask |= near & gap
+        return mask
+
     def _resolve(self) -> None:
         g, t = self.graph, self.table
         n_post = t.status.shape[1]
@@ -237,11 +480,21 @@ class Analysis:
         regions: list[tuple[int, int, int]] = []  # (first node, certain, row * 2^40 + possible)
         self._unresolved: list[tuple[int, int]] = []
         self._extra_certain: list[int] = []
+        # possible components holding an open node: a region may hide there
+        self._open_possible: list[NDArray[np.bool_]] = []
+        for row in (0, 1):
+            labels = g.possible[row].reshape(len(self.areas), n_post, g.slots)[
+                self.open_nodes[row]
+            ]
+            flag = np.zeros(g.n_possible[row], dtype=bool)
+            flag[labels[labels >= 0]] = True
+            self._open_possible.append(flag)
         for row, s in enumerate((1, -1)):
             for u in range(g.n_possible[row]):
                 inside = np.flatnonzero((g.certain_sign == s) & (self._certain_to_possible == u))
                 if not inside.size:
-                    self._unresolved.append((row, u))
+                    if self._open_possible[row][u]:
+                        self._unresolved.append((row, u))
                     continue
                 c = int(inside[np.argmax(sizes[inside])])
                 self._extra_certain.extend(int(x) for x in inside if x != c)
@@ -283,6 +536,33 @@ class Analysis:
         del n_post
 
     @property
+    def count(self) -> tuple[int, int | None]:
+        """Certified bounds ``(at_least, at_most)`` on the number of regions.
+
+        ``at_least`` counts the possible components that hold a certified part
+        (each holds a region of its own); ``at_most`` counts the certified parts,
+        and is None (no bound) while a region may hide in an open node (see
+        :mod:`moveability.flows`). The count is known when they are equal.
+
+        Examples
+        --------
+        >>> from moveability import analyze
+        >>> from moveability.mechanisms import FiveBar
+        >>> analyze(FiveBar(7, 8, 5, 8, 5), precision=0.1).count
+        (2, None)
+        >>> analyze(FiveBar(7, 8, 5, 8, 5), precision=0.1, resolve=True).count
+        (2, 2)
+        """
+        hiding = any(flag.any() for flag in self._open_possible)
+        return len(self.regions), None if hiding else self.graph.certain_sign.size
+
+    @property
+    def n_regions(self) -> int | None:
+        """The number of regions where it is proved, else None (see :attr:`count`)."""
+        at_least, at_most = self.count
+        return at_least if at_least == at_most else None
+
+    @property
     def measure_name(self) -> str:
         """What the measures of sets of poses are: ``area`` (2 pose axes), ``volume`` (3)."""
         return {1: "length", 2: "area", 3: "volume"}.get(self.tree.ndim, "measure")
@@ -301,12 +581,14 @@ class Analysis:
     def undecided(self) -> dict[str, float | int]:
         """What the precision left open.
 
-        ``components``: possible components with no certified part (a region
-        may or may not hide there), with the ``area`` of the leaves they touch;
-        ``detached``: certified parts whose region is not known (they lie in a
-        listed region's possible part but may belong to another region hiding
-        there); ``boundary_area``: area of the leaves left undecided. With three
-        pose axes the keys say ``volume`` for ``area``.
+        ``components``: possible components with no certified part where a
+        region may still hide (they hold an open node), with the ``area`` of the
+        leaves they touch; ``detached``: certified parts whose region is not
+        known (they share a listed region's possible part and may or may not be
+        in that region); ``boundary_area``: area of the leaves left undecided;
+        ``open_area``: area of the leaves holding an open node (an uncertified
+        node not proved to join a certified part). With three pose axes the keys
+        say ``volume`` for ``area``.
         """
         g = self.graph
         touch = np.zeros(self.areas.size, dtype=bool)
@@ -314,11 +596,13 @@ class Analysis:
             touch |= (g.possible[row] == u).any(axis=1)
         undecided_leaves = self.tree.status == BOUNDARY
         measure = self.measure_name
+        open_leaves = self.open_nodes.any(axis=(0, 2))
         return {
             "components": len(self._unresolved),
             measure: float(self.areas[touch].sum()),
             "detached": len(self._extra_certain),
             f"boundary_{measure}": float(self.areas[undecided_leaves].sum()),
+            f"open_{measure}": float(self.areas[open_leaves].sum()),
         }
 
     @property
@@ -327,9 +611,14 @@ class Analysis:
         if any(r.equals_workspace for r in self.regions):
             return True
         g = self.graph
-        # every possible component misses a leaf certainly in W
+        # every possible component that may hold a region misses a leaf certainly in W
+        occupied = [np.zeros(g.n_possible[row], dtype=bool) for row in (0, 1)]
+        for _, row, u in self._region_nodes:
+            occupied[row][u] = True
         for row in (0, 1):
             for u in range(g.n_possible[row]):
+                if not (occupied[row][u] or self._open_possible[row][u]):
+                    continue  # proved to hold no region
                 touch = (g.possible[row] == u).any(axis=1)
                 if not (self._w_certain & ~touch).any():
                     return None
@@ -504,6 +793,7 @@ class Analysis:
                 }
                 for r in self.regions
             ],
+            "count": {"at_least": self.count[0], "at_most": self.count[1]},
             "n_connected": self.n_connected,
             "generalized_aspects": self.generalized_aspects,
             "undecided": self.undecided,
@@ -519,7 +809,7 @@ class Analysis:
             f"{self.mechanism!r}",
             f"precision {self.precision_text}: {len(self.tree)} leaves",
             f"workspace {measure} in [{w[0]:.4f}, {w[1]:.4f}]",
-            f"{len(self.regions)} region(s):",
+            f"{count_text(*self.count)}:",
         ]
         for r in self.regions:
             eq = {True: "yes", False: "no", None: "unknown"}[r.equals_workspace]

@@ -35,6 +35,7 @@ __all__ = [
     "exp",
     "hull",
     "log",
+    "may_contain_angle",
     "power",
     "rational",
     "sin",
@@ -61,6 +62,17 @@ def _up(x: Array, ulps: int = 1) -> Array:
     for _ in range(ulps):
         x = np.nextafter(x, _INF)
     return x
+
+
+def _down_sum(x: Array) -> Array:
+    """A rounded sum or difference widened down; a zero result is exact (with
+    gradual underflow a float sum rounds to zero only when it is zero)."""
+    return np.where(x == 0, x, _down(x))
+
+
+def _up_sum(x: Array) -> Array:
+    """A rounded sum or difference widened up; a zero result is exact."""
+    return np.where(x == 0, x, _up(x))
 
 
 @dataclass(frozen=True)
@@ -123,25 +135,34 @@ class Interval:
     def __add__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
         with np.errstate(over="ignore"):
-            return Interval(_down(self.lo + o.lo), _up(self.hi + o.hi))
+            return Interval(_down_sum(self.lo + o.lo), _up_sum(self.hi + o.hi))
 
     __radd__ = __add__
 
     def __sub__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
         with np.errstate(over="ignore"):
-            return Interval(_down(self.lo - o.hi), _up(self.hi - o.lo))
+            return Interval(_down_sum(self.lo - o.hi), _up_sum(self.hi - o.lo))
 
     def __rsub__(self, other: IntervalLike) -> Interval:
         return as_interval(other) - self
 
     def __mul__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
+        s_lo, s_hi, o_lo, o_hi = np.broadcast_arrays(self.lo, self.hi, o.lo, o.hi)
+        a = np.stack([s_lo, s_lo, s_hi, s_hi])
+        b = np.stack([o_lo, o_hi, o_lo, o_hi])
         with np.errstate(invalid="ignore", over="ignore"):
-            products = np.stack([self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi])
+            products = a * b
         # 0 * inf is nan: the product of a zero bound is zero
         products = np.where(np.isnan(products), 0.0, products)
-        return Interval(_down(products.min(axis=0)), _up(products.max(axis=0)))
+        low, high = products.min(axis=0), products.max(axis=0)
+        # a product with a zero factor is exact: a zero bound needs no widening unless
+        # some zero product is an underflow (non-zero factors)
+        exact = ~((products == 0) & (a != 0) & (b != 0)).any(axis=0)
+        lo = np.where((low == 0) & exact, 0.0, _down(low))
+        hi = np.where((high == 0) & exact, 0.0, _up(high))
+        return Interval(lo, hi)
 
     __rmul__ = __mul__
 
@@ -185,7 +206,9 @@ def square(x: IntervalLike) -> Interval:
         a, b = x.lo * x.lo, x.hi * x.hi
     straddles = (x.lo <= 0) & (x.hi >= 0)
     lo = np.where(straddles, 0.0, _down(np.minimum(a, b)))
-    return Interval(np.maximum(lo, 0.0), _up(np.maximum(a, b)))
+    # the square of an exact zero is exact
+    hi = np.where((x.lo == 0) & (x.hi == 0), 0.0, _up(np.maximum(a, b)))
+    return Interval(np.maximum(lo, 0.0), hi)
 
 
 def sqrt(x: IntervalLike) -> Interval:
@@ -197,8 +220,14 @@ def sqrt(x: IntervalLike) -> Interval:
     return Interval(np.maximum(lo, 0.0), hi)
 
 
-def _contains_point(x: Interval, phase: float) -> NDArray[np.bool_]:
-    """Whether ``[lo, hi]`` may contain a point ``phase + 2 k pi`` (conservative)."""
+def may_contain_angle(x: Interval, phase: float | NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Whether each ``[lo, hi]`` may contain an angle ``phase + 2 k pi`` (conservative).
+
+    Examples
+    --------
+    >>> may_contain_angle(Interval([6.0, 0.5], [6.5, 1.0]), 0.0).tolist()
+    [True, False]
+    """
     with np.errstate(over="ignore", invalid="ignore"):
         # the quotient's rounding error grows with |x|: the margin is relative
         tol = 1e-12 * np.maximum(1.0, np.maximum(np.abs(x.lo), np.abs(x.hi)))
@@ -215,8 +244,8 @@ def cos(x: IntervalLike) -> Interval:
     hi = np.maximum(c_lo, c_hi)
     with np.errstate(over="ignore", invalid="ignore"):
         wide = (x.hi - x.lo) >= _TWO_PI
-    has_max = wide | _contains_point(x, 0.0)
-    has_min = wide | _contains_point(x, np.pi)
+    has_max = wide | may_contain_angle(x, 0.0)
+    has_min = wide | may_contain_angle(x, np.pi)
     lo = np.where(has_min, -1.0, _down(lo, _LIB_ULPS))
     hi = np.where(has_max, 1.0, _up(hi, _LIB_ULPS))
     return Interval(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
@@ -230,8 +259,8 @@ def sin(x: IntervalLike) -> Interval:
     hi = np.maximum(s_lo, s_hi)
     with np.errstate(over="ignore", invalid="ignore"):
         wide = (x.hi - x.lo) >= _TWO_PI
-    has_max = wide | _contains_point(x, 0.5 * np.pi)
-    has_min = wide | _contains_point(x, -0.5 * np.pi)
+    has_max = wide | may_contain_angle(x, 0.5 * np.pi)
+    has_min = wide | may_contain_angle(x, -0.5 * np.pi)
     lo = np.where(has_min, -1.0, _down(lo, _LIB_ULPS))
     hi = np.where(has_max, 1.0, _up(hi, _LIB_ULPS))
     return Interval(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
@@ -367,7 +396,7 @@ def tan(x: IntervalLike) -> Interval:
     with np.errstate(over="ignore", invalid="ignore"):
         wide = (x.hi - x.lo) >= np.pi
     # poles at pi/2 + k pi
-    pole = wide | _contains_point(x, 0.5 * np.pi) | _contains_point(x, -0.5 * np.pi)
+    pole = wide | may_contain_angle(x, 0.5 * np.pi) | may_contain_angle(x, -0.5 * np.pi)
     pole |= ~np.isfinite(x.lo) | ~np.isfinite(x.hi)
     with np.errstate(invalid="ignore"):
         lo = _down(np.tan(x.lo), _LIB_ULPS)

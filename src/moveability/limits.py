@@ -84,6 +84,58 @@ class JointLimit:
             return out
         return classify_angles(angles, self.lo, self.hi)
 
+    def pieces(
+        self, angles: Interval
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_]]:
+        """The pieces of the range that each enclosure meets, and which of their ends
+        are stops inside the enclosure.
+
+        An enclosure of a limited revolute joint may hold values on both sides of a
+        stop: near ``hi`` and, a turn on, near ``lo``. Piece 0 is where the
+        enclosure enters the range, piece 1 its next turn from ``lo`` (see
+        :func:`moveability.regions.region_graph`). Returns ``(exists, lower,
+        upper)``, each of shape (2, ...): whether the piece may hold values,
+        whether its lower end is a lower stop inside the enclosure (a motion that
+        never decreases the joint keeps such values valid), and whether its upper
+        end is an upper stop inside the enclosure. Free joints have one piece
+        without stops; strokes one piece.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from moveability.intervals import Interval
+        >>> exists, lower, upper = JointLimit(-np.pi, np.pi).pieces(Interval([3.0], [3.3]))
+        >>> exists[:, 0].tolist(), lower[:, 0].tolist(), upper[:, 0].tolist()
+        ([True, True], [False, True], [True, False])
+        """
+        shape = (2, *angles.lo.shape)
+        exists = np.zeros(shape, dtype=bool)
+        lower = np.zeros(shape, dtype=bool)
+        upper = np.zeros(shape, dtype=bool)
+        a, b = angles.lo, angles.hi
+        with np.errstate(invalid="ignore", over="ignore"):
+            tol = 1e-9 * np.maximum(1.0, np.maximum(np.abs(a), np.abs(b)))
+            if self.periodic:
+                exists[0] = True
+                return exists, lower, upper
+            if self.prismatic:
+                exists[0] = ~((b < self.lo - tol) | (a > self.hi + tol))
+                lower[0] = ~(a > self.lo + tol)
+                upper[0] = ~(b < self.hi - tol)
+                return exists, lower, upper
+            k = np.floor((a - self.lo) / _TWO_PI)
+            k = np.where(np.isfinite(k), k, 0.0)
+            a0 = a - _TWO_PI * k
+            b0 = b - _TWO_PI * k
+            wide = ~(b - a < _TWO_PI - tol)
+            exists[0] = wide | ~(a0 > self.hi + tol)
+            lower[0] = wide | ~(a0 > self.lo + tol)
+            upper[0] = wide | ~(b0 < self.hi - tol)
+            exists[1] = ~wide & ~(b0 - _TWO_PI < self.lo - tol)
+            lower[1] = True
+            upper[1] = ~(b0 - _TWO_PI < self.hi - tol)
+        return exists, lower, upper
+
     def wrap(self, angles: ArrayLike) -> NDArray[np.float64]:
         """Representatives of angles in ``[lo, lo + 2 pi)`` (in ``[-pi, pi)`` if unlimited);
         prismatic values as they are."""

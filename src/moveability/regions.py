@@ -29,7 +29,7 @@ from scipy.sparse.csgraph import connected_components
 
 from .limits import JointLimit
 from .sheets import SheetTable
-from .status import IN, OUT
+from .status import IN
 
 __all__ = ["RegionGraph", "region_graph", "split_legs"]
 
@@ -154,12 +154,15 @@ def region_graph(
     postures: NDArray[np.int64],
     cross_serial: bool = True,
     limits: tuple[JointLimit, ...] | None = None,
+    reachable_contact: NDArray[np.bool_] | None = None,
 ) -> RegionGraph:
     """Build both graphs from a sheet table and the touching leaf pairs.
 
     With ``cross_serial=False`` no path may meet a serial singularity (det B = 0)
     either: postures never change, and the components are the generalized
-    aspects (det A and det B of constant sign).
+    aspects (det A and det B of constant sign). ``reachable_contact`` says, per
+    pair, that the two leaves' common boundary holds a pose every leg reaches:
+    two certified fold groups of one posture then share a configuration there.
     """
     n, n_post = table.status.shape
     if limits is None:
@@ -180,6 +183,8 @@ def region_graph(
             ((table.status[a, p] == IN) & certified[b, p])
             | (certified[a, p] & (table.status[b, p] == IN))
         )
+        if reachable_contact is not None:
+            ok |= (sa == sb) & group[a, p] & group[b, p] & reachable_contact
         edges.append(np.stack([node[a[ok], p], node[b[ok], p]], axis=1))
     for p, q, differ in _posture_pairs(postures):
         # members of one fold group: they differ only on legs folding in the leaf
@@ -237,7 +242,7 @@ def region_graph(
     possible = np.full((2, n * n_post * slots), -1, dtype=np.int64)
     counts = []
     for row, s in enumerate((1, -1)):
-        alive = (table.status != OUT) & ((table.sign == s) | (table.sign == 0))
+        alive = table.may_hold(s)
         edges = []
         for p in range(n_post):
             live = alive[a, p] & alive[b, p]

@@ -21,7 +21,7 @@ group is where a region changes posture.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,7 +31,7 @@ from .limits import INSIDE, OUTSIDE
 from .mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
 from .status import BOUNDARY, IN, OUT
 
-__all__ = ["SheetTable", "classify_sheets"]
+__all__ = ["SheetTable", "classify_sheets", "stack_tables"]
 
 Array = NDArray[np.float64]
 
@@ -54,6 +54,14 @@ class SheetTable:
         Those configurations are within the joint limits.
     group : (n, P) bool
         The posture belongs to a certified fold group of its box.
+    singular : (n, P) bool
+        det A vanishes on every configuration of the node (a posture the
+        mechanism knows to be identically singular): it holds no configuration
+        of any region.
+    det_lo, det_hi : (n, P) float
+        Enclosure of det A over the node's configurations (NaN where unknown):
+        a node whose det A is never positive holds no configuration of a region
+        with det A > 0, and likewise for negative.
     angles_lo, angles_hi : (n, P, n_legs) float
         Enclosure (unwrapped) of each leg's joint angle over the sheet: its
         branch where the leg is regular, both branches where it may fold.
@@ -65,6 +73,9 @@ class SheetTable:
     exists: NDArray[np.bool_]
     within: NDArray[np.bool_]
     group: NDArray[np.bool_]
+    singular: NDArray[np.bool_]
+    det_lo: NDArray[np.float64]
+    det_hi: NDArray[np.float64]
     angles_lo: NDArray[np.float64]
     angles_hi: NDArray[np.float64]
 
@@ -73,9 +84,26 @@ class SheetTable:
         """(n, n_legs): legs whose branches may meet in the box."""
         return (self.leg_status != REGULAR) & (self.leg_status != REACH_OUT)
 
+    def may_hold(self, s: int) -> NDArray[np.bool_]:
+        """(n, P): nodes that may hold a valid configuration with det A of sign ``s``."""
+        with np.errstate(invalid="ignore"):
+            room = ~(self.det_hi <= 0) if s > 0 else ~(self.det_lo >= 0)
+        return (self.status != OUT) & (self.sign != -s) & ~self.singular & room
+
+    def take(self, index: NDArray[np.intp]) -> SheetTable:
+        """The rows of some boxes, in the order given."""
+        return SheetTable(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
+
+    def statuses(self) -> NDArray[np.uint8]:
+        """A tree status per box: OUT where no sheet holds a valid configuration, IN
+        where every sheet is decided, BOUNDARY elsewhere."""
+        dead = (self.status == OUT).all(axis=1)
+        return np.where(dead, OUT, np.where(self.decided(), IN, BOUNDARY)).astype(np.uint8)
+
     def decided(self) -> NDArray[np.bool_]:
-        """Boxes where no leg folds and every sheet is IN or OUT."""
-        return ~self.folding.any(axis=1) & (self.status != BOUNDARY).all(axis=1)
+        """Boxes where no leg folds and every sheet is IN, OUT or identically singular."""
+        settled = (self.status != BOUNDARY) | self.singular
+        return ~self.folding.any(axis=1) & settled.all(axis=1)
 
 
 def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
@@ -91,9 +119,12 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
     exists = np.zeros((n, n_post), dtype=bool)
     within = np.zeros((n, n_post), dtype=bool)
     group = np.zeros((n, n_post), dtype=bool)
+    det_lo = np.zeros((n, n_post))
+    det_hi = np.zeros((n, n_post))
     angles_lo = np.zeros((n, n_post, len(legs)))
     angles_hi = np.zeros((n, n_post, len(legs)))
 
+    singular = np.array([mechanism.identically_singular(p) for p in range(n_post)], dtype=bool)
     # limits of each leg branch, and of each leg's hull where it folds
     branch_limits = [
         [mechanism.limits[i].classify(b) for b in reaches[i].branches] for i in range(len(legs))
@@ -137,7 +168,8 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
             lim_in &= code == INSIDE
             lim_out |= code == OUTSIDE
         with np.errstate(invalid="ignore"):
-            det = mechanism.det_a_boxes(lo, hi, angles)
+            det = mechanism.det_a_boxes(lo, hi, angles, posture=p)
+        det_lo[:, p], det_hi[:, p] = det.lo, det.hi
         positive = det.lo > 0
         negative = det.hi < 0
         sign[:, p] = np.where(positive, 1, np.where(negative, -1, 0))
@@ -156,6 +188,16 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         exists=exists,
         within=within,
         group=group,
+        singular=np.broadcast_to(singular[None, :], (n, n_post)),
+        det_lo=det_lo,
+        det_hi=det_hi,
         angles_lo=angles_lo,
         angles_hi=angles_hi,
+    )
+
+
+def stack_tables(tables: list[SheetTable]) -> SheetTable:
+    """The rows of several tables, one after the other."""
+    return SheetTable(
+        **{f.name: np.concatenate([getattr(t, f.name) for t in tables]) for f in fields(SheetTable)}
     )

@@ -16,7 +16,7 @@ from .errors import ResolutionError
 from .keys import KeyLayout
 from .status import BOUNDARY
 
-__all__ = ["merge_siblings", "subdivide"]
+__all__ = ["merge_siblings", "split_leaves", "subdivide"]
 
 Decide = Callable[[NDArray[np.uint64], NDArray[np.int64], int], NDArray[np.uint8]]
 Progress = Callable[[int, int, int], object]
@@ -28,6 +28,7 @@ def subdivide(
     *,
     max_leaves: int,
     progress: Progress | None = None,
+    stop_level: int | None = None,
 ) -> tuple[NDArray[np.uint64], NDArray[np.uint8], NDArray[np.uint8]]:
     """Subdivide the root cell until every leaf is decided or at maximal depth.
 
@@ -43,6 +44,9 @@ def subdivide(
         Raise :class:`ResolutionError` rather than hold more cells than this.
     progress : callable, optional
         Called as ``progress(level, n_frontier, n_leaves)`` after each level.
+    stop_level : int, optional
+        Split no cell of this level or deeper (default: the maximal level); the
+        levels beyond are left to :func:`split_leaves`.
 
     Returns
     -------
@@ -60,7 +64,7 @@ def subdivide(
     while keys.size:
         status = np.asarray(decide(keys, anchors, level), dtype=np.uint8)
         split = status == BOUNDARY
-        if level >= layout.n_levels:
+        if level >= (layout.n_levels if stop_level is None else min(stop_level, layout.n_levels)):
             split[:] = False
         leaf = ~split
         out_keys.append(keys[leaf])
@@ -126,3 +130,34 @@ def merge_siblings(
         levels[first] = level - 1
         keys, levels, status = keys[keep], levels[keep], status[keep]
     return keys, levels, status
+
+
+def split_leaves(
+    layout: KeyLayout,
+    keys: NDArray[np.uint64],
+    levels: NDArray[np.uint8],
+    anchors: NDArray[np.int64],
+) -> tuple[NDArray[np.uint64], NDArray[np.uint8], NDArray[np.int64]]:
+    """The children of cells (keys, levels, anchors), sorted by key.
+
+    Cells must be above the maximal level. Returns the children's keys, levels
+    and anchors.
+    """
+    out_keys, out_levels, out_anchors = [], [], []
+    for level in np.unique(levels):
+        at = np.flatnonzero(levels == level)
+        key_off, anchor_off = layout.child_offsets(int(level))
+        out_keys.append((keys[at][:, None] + key_off[None, :]).ravel())
+        out_anchors.append(
+            (anchors[at][:, None, :] + anchor_off[None, :, :]).reshape(-1, layout.ndim)
+        )
+        out_levels.append(np.full(at.size * key_off.size, int(level) + 1, dtype=np.uint8))
+    if not out_keys:
+        return (
+            np.zeros(0, dtype=np.uint64),
+            np.zeros(0, dtype=np.uint8),
+            np.zeros((0, layout.ndim), dtype=np.int64),
+        )
+    all_keys = np.concatenate(out_keys)
+    order = np.argsort(all_keys, kind="stable")
+    return all_keys[order], np.concatenate(out_levels)[order], np.concatenate(out_anchors)[order]

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import InvalidParameterError, ResolutionError
 from .keys import KeyLayout
 from .status import BOUNDARY, IN, OUT, is_valid_status
-from .subdivision import Progress, merge_siblings, subdivide
+from .subdivision import Progress, merge_siblings, split_leaves, subdivide
 
 __all__ = ["MAX_DIMENSION", "HyperTree", "Leaves", "load"]
 
@@ -184,6 +184,7 @@ class HyperTree:
         max_leaves: int = DEFAULT_MAX_LEAVES,
         merge: bool = True,
         progress: Progress | None = None,
+        stop_level: int | None = None,
     ) -> HyperTree:
         """Build a tree by adaptive subdivision of the box ``[lo, hi]``.
 
@@ -208,6 +209,9 @@ class HyperTree:
             Merge complete groups of IN (or OUT) siblings into their parent.
         progress : callable, optional
             Called as ``progress(level, n_split, n_leaves)`` after each level.
+        stop_level : int, optional
+            Split no cell of this level or deeper; the levels beyond
+            (up to ``max_depth``) are reached by :meth:`refine` only.
 
         Returns
         -------
@@ -259,11 +263,57 @@ class HyperTree:
             return result.astype(np.uint8)
 
         keys, levels, status = subdivide(
-            layout, decide, max_leaves=int(max_leaves), progress=progress
+            layout, decide, max_leaves=int(max_leaves), progress=progress, stop_level=stop_level
         )
         if merge:
             keys, levels, status = merge_siblings(layout, keys, levels, status)
         return cls(lo_a, hi_a, layout.max_depth, keys, levels, status, periodic_t)
+
+    def refine(self, mask: ArrayLike, classify: Classifier) -> HyperTree:
+        """A tree whose selected leaves are split once, their children classified.
+
+        Leaves already at the maximal level stay as they are. ``classify``
+        receives the children's boxes in key order (the order they take among
+        the leaves of the new tree). Nothing is merged.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from moveability import HyperTree, IN, BOUNDARY
+        >>> tree = HyperTree.build([0, 0], [1, 1], lambda lo, hi: np.full(len(lo), BOUNDARY),
+        ...                        max_depth=3, stop_level=1)
+        >>> finer = tree.refine([True, False, False, False], lambda lo, hi: np.full(len(lo), IN))
+        >>> len(tree), len(finer), finer.levels.tolist()
+        (4, 7, [2, 2, 2, 2, 1, 1, 1])
+        """
+        m = np.asarray(mask, dtype=bool)
+        if m.shape != (len(self),):
+            raise InvalidParameterError("mask", f"{len(self)} booleans", m.shape)
+        split = m & (self._levels < self._layout.n_levels)
+        if not split.any():
+            return self
+        keys, levels, anchors = split_leaves(
+            self._layout, self._keys[split], self._levels[split], self.anchors[split]
+        )
+        sizes = self._layout.cell_sizes(levels)
+        cell_lo = _to_coordinates(self._lo, self._hi, self._layout, anchors)
+        cell_hi = _to_coordinates(self._lo, self._hi, self._layout, anchors + sizes)
+        status = np.asarray(classify(cell_lo, cell_hi))
+        if status.shape != (keys.size,) or not is_valid_status(status.astype(np.int64)).all():
+            raise InvalidParameterError(
+                "classify", f"a function returning {keys.size} statuses", status.shape
+            )
+        all_keys = np.concatenate([self._keys[~split], keys])
+        order = np.argsort(all_keys, kind="stable")
+        return HyperTree(
+            self._lo,
+            self._hi,
+            self.max_depth,
+            all_keys[order],
+            np.concatenate([self._levels[~split], levels])[order],
+            np.concatenate([self._status[~split], status.astype(np.uint8)])[order],
+            self._periodic,
+        )
 
     @classmethod
     def from_array(

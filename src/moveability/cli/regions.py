@@ -43,9 +43,9 @@ def format_regions(data: Mapping[str, Any]) -> str:
         "precision: " + (", ".join(f"{v:g}" for v in eps) if isinstance(eps, list) else f"{eps:g}"),
         f"workspace {measure}: {_area(data['workspace'][measure])}",
         (
-            f"generalized aspects: {len(data['regions'])}"
+            f"generalized aspects: {_count(data)}"
             if data.get("generalized_aspects")
-            else f"N-connected regions: {len(data['regions'])}"
+            else f"N-connected regions: {_count(data)}"
         ),
     ]
     if data["regions"]:
@@ -68,8 +68,23 @@ def format_regions(data: Mapping[str, Any]) -> str:
             f"undecided at this precision: {undecided[f'boundary_{measure}']:.6g} of {measure} in "
             f"undecided cells; {undecided['components']} possible region(s) without a "
             f"certified part, {undecided['detached']} certified part(s) of unknown region"
+            + (
+                f"; {undecided[f'open_{measure}']:.6g} of {measure} where a region may hide"
+                if f"open_{measure}" in undecided
+                else ""
+            )
         )
     return "\n".join(lines)
+
+
+def _count(data: Mapping[str, Any]) -> str:
+    """The count, definite only when proved; the listed regions otherwise."""
+    count = data.get("count")
+    if count is None or count["at_least"] == count["at_most"]:
+        return str(len(data["regions"]))
+    if count["at_most"] is None:
+        return f"at least {count['at_least']} (no upper bound proved)"
+    return f"at least {count['at_least']}, at most {count['at_most']}"
 
 
 @click.command("regions")
@@ -77,8 +92,21 @@ def format_regions(data: Mapping[str, Any]) -> str:
 @options.precision_option
 @options.json_options
 @options.aspects_option
+@click.option(
+    "--resolve/--no-resolve",
+    "resolve",
+    default=False,
+    show_default=True,
+    help="Refine, below the precision, the cells that keep the count of regions open "
+    "(within a deterministic budget); --no-resolve keeps the plain pass.",
+)
 def regions_command(
-    spec: str, precision: float, json_out: str | None, overwrite: bool, generalized_aspects: bool
+    spec: str,
+    precision: float,
+    json_out: str | None,
+    overwrite: bool,
+    generalized_aspects: bool,
+    resolve: bool,
 ) -> None:
     """The N-connected regions of the workspace of the manipulator of SPEC.
 
@@ -94,6 +122,7 @@ def regions_command(
             precision,
             options.progress_reporter(),
             **options.analysis_options(generalized_aspects),
+            **({"resolve": True} if resolve else {}),
         )
         data = result.to_dict()
     options.write_output(data, json_out, overwrite, format_regions)

@@ -243,10 +243,70 @@ class Mechanism:
         raise NotImplementedError
 
     # ----------------------------------------------------------------- boxes
-    def det_a_boxes(self, lo: Array, hi: Array, angles: list[Interval]) -> Interval:
-        """Enclosure of det A over boxes of poses with joint-angle enclosures per leg."""
+    def det_a_boxes(
+        self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
+    ) -> Interval:
+        """Enclosure of det A over boxes of poses with joint-angle enclosures per leg
+        (``posture``, when given, is the posture whose configurations they hold)."""
         rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.legs)]
         return interval_det(rows)
+
+    def identically_singular(self, posture: int) -> bool:
+        """Whether det A vanishes on every configuration of a posture (it then holds
+        no configuration of any region). Mechanisms that know such postures say so."""
+        return False
+
+    def rows_and_partials(
+        self, lo: Array, hi: Array, angles: list[Interval]
+    ) -> tuple[list[list[Interval]], list[tuple[list[list[Interval]], list[Interval]]]] | None:
+        """The rows of A over boxes and their partial derivatives (each leg's
+        ``row_partials``); None when a leg gives none."""
+        if not all(hasattr(leg, "row_partials") for leg in self.legs):
+            return None
+        rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.legs)]
+        partials = [
+            leg.row_partials(lo, hi, angles[i])  # type: ignore[attr-defined]
+            for i, leg in enumerate(self.legs)
+        ]
+        return rows, partials
+
+    def det_a_rate(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        velocity: list[Interval],
+        joint_rates: list[Interval],
+        rows_and_partials: (
+            tuple[list[list[Interval]], list[tuple[list[list[Interval]], list[Interval]]]]
+            | None
+        ) = None,
+    ) -> Interval | None:
+        """Enclosure of the rate of det A over boxes when the pose moves at
+        ``velocity`` (one enclosure per pose axis) and each joint at its rate.
+
+        det A is linear in each row: each leg's row is differentiated in turn,
+        ``d row = (d row / dX) velocity + (d row / dq) rate``. None when a leg
+        gives no ``row_partials``. ``rows_and_partials`` may be given, as
+        :meth:`rows_and_partials` returns them, to spare computing them again.
+        """
+        known = rows_and_partials or self.rows_and_partials(lo, hi, angles)
+        if known is None:
+            return None
+        rows, partials = known
+        k = len(velocity)
+        total: Interval | None = None
+        for i in range(len(self.legs)):
+            along_x, along_q = partials[i]
+            moved = []
+            for j in range(k):
+                rate = along_q[j] * joint_rates[i]
+                for axis in range(k):
+                    rate = rate + along_x[j][axis] * velocity[axis]
+                moved.append(rate)
+            term = interval_det([*rows[:i], moved, *rows[i + 1:]])
+            total = term if total is None else total + term
+        return total
 
     def fold_waypoints(
         self, legs: tuple[int, ...], lo: Array, hi: Array, statuses: tuple[int, ...]

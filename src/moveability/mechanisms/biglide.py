@@ -86,6 +86,59 @@ class SliderLeg:
     def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]:
         return [Interval(lo[:, 0], hi[:, 0]) - angles, Interval(lo[:, 1], hi[:, 1])]
 
+    def offset(self, lo: Array, hi: Array, branch: int) -> Interval:
+        """``x - rho`` on a branch over boxes: ``-+sqrt(L^2 - y^2)``, free of x."""
+        y2 = iv.square(Interval(lo[:, 1], hi[:, 1]))
+        L2 = iv.square(iv.as_interval(self.length))
+        with np.errstate(invalid="ignore"):
+            h = iv.sqrt(Interval(np.maximum((L2 - y2).lo, 0.0), np.maximum((L2 - y2).hi, 0.0)))
+        return -h if branch == 0 else h
+
+    def row_partials(
+        self, lo: Array, hi: Array, angles: Interval
+    ) -> tuple[list[list[Interval]], list[Interval]]:
+        """Partial derivatives of the row ``(x - rho, y)``: the identity along the pose,
+        ``(-1, 0)`` along the slider."""
+        n = lo.shape[0]
+        one, zero = iv.as_interval(np.ones(n)), iv.as_interval(np.zeros(n))
+        return [[one, zero], [zero, one]], [-one, zero]
+
+    def joint_gradient(self, lo: Array, hi: Array, branch: int, angles: Interval) -> list[Interval]:
+        """``drho/dP = (1, y / (x - rho))`` on a branch, over boxes where the leg is
+        regular; ``x - rho = -+sqrt(L^2 - y^2)`` is enclosed free of x."""
+        n = lo.shape[0]
+        y = Interval(lo[:, 1], hi[:, 1])
+        return [iv.as_interval(np.ones(n)), y / self.offset(lo, hi, branch)]
+
+    def fold_flow(
+        self, lo: Array, hi: Array, status: NDArray[np.uint8], branch: int, direction: Array
+    ) -> tuple[NDArray[np.bool_], Interval]:
+        """Over boxes where the leg may stand perpendicular to the rail: whether moving
+        along ``direction`` keeps a pose reachable (``|y|`` never grows), and an
+        enclosure of the slider's rate on ``branch``, ``x +- sqrt(L^2 - y^2)``.
+
+        The rate is ``d_x -+ (y / h) d_y`` with ``h = sqrt(L^2 - y^2)`` in
+        ``[0, h_max]`` over the reachable part: ``y / h`` is unbounded but at least
+        ``y_min / h_max`` in size, with the sign of ``y``.
+        """
+        d = np.asarray(direction, dtype=np.float64)
+        y = Interval(lo[:, 1], hi[:, 1])
+        keeps = (status == FOLD_OUTER) & ((y * d[1]).hi <= 0)
+        h_max = self.offset(lo, hi, 1).hi
+        usable = h_max > 0
+        pos, neg = (lo[:, 1] > 0) & usable, (hi[:, 1] < 0) & usable
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = Interval(
+                np.where(pos, np.nextafter(lo[:, 1] / h_max, -np.inf), -np.inf),
+                np.where(neg, np.nextafter(hi[:, 1] / h_max, np.inf), np.inf),
+            )
+        sign = 1.0 if branch == 0 else -1.0
+        if d[1] == 0:
+            rate = Interval(np.full(lo.shape[0], d[0]))
+        else:
+            rate = ratio * (-sign * d[1]) + d[0]
+        return keeps, rate
+
     def reach(self, lo: Array, hi: Array) -> LegReach:
         """REGULAR where ``|y| < L`` on the whole box, REACH_OUT where ``|y| > L``;
         FOLD_OUTER where the box holds poses on both sides. The reachable part of
@@ -161,7 +214,8 @@ class Biglide(Mechanism):
         if len(limits) != 2 or not all(lim.prismatic for lim in limits):
             raise InvalidParameterError("limits", "two prismatic strokes", limits)
         self.limits = tuple(limits)
-        self.legs = (SliderLeg(self.lengths[0], "rho1"), SliderLeg(self.lengths[1], "rho2"))
+        self.slider_legs = (SliderLeg(self.lengths[0], "rho1"), SliderLeg(self.lengths[1], "rho2"))
+        self.legs = self.slider_legs
         x_lo = max(round_down(lim.lo - L) for lim, L in zip(self.limits, self.lengths, strict=True))
         x_hi = min(round_up(lim.hi + L) for lim, L in zip(self.limits, self.lengths, strict=True))
         if not x_lo < x_hi:
@@ -173,6 +227,31 @@ class Biglide(Mechanism):
         hi = np.array([x_hi, y_max])
         pad = 1e-3 * (hi - lo) + 4 * np.spacing(np.abs(np.concatenate([lo, hi])).max())
         self.bounds = (lo - pad, hi + pad)
+
+    def det_a_boxes(
+        self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
+    ) -> Interval:
+        """Enclosure of ``det A = y (rho2 - rho1)``; for a known posture
+        ``rho2 - rho1 = s2 h2 - s1 h1`` with ``h_i = sqrt(L_i^2 - y^2)``, free of x
+        (and exactly 0 for the identically singular postures)."""
+        if posture is None:
+            return super().det_a_boxes(lo, hi, angles)
+        branches = self.postures[posture]
+        if self.identically_singular(posture):
+            zero = np.zeros(lo.shape[0])
+            return Interval(zero, zero)
+        offsets = [
+            leg.offset(lo, hi, int(b)) for leg, b in zip(self.slider_legs, branches, strict=True)
+        ]
+        # x - rho_i = offsets[i], so rho2 - rho1 = offsets[0] - offsets[1]
+        y = Interval(lo[:, 1], hi[:, 1])
+        return y * (offsets[0] - offsets[1])
+
+    def identically_singular(self, posture: int) -> bool:
+        """With legs of equal lengths, ``++`` and ``--`` put both sliders at one place:
+        ``det A = y (rho2 - rho1)`` vanishes on their whole sheets."""
+        branches = self.postures[posture]
+        return self.lengths[0] == self.lengths[1] and branches[0] == branches[1]
 
     def _strokes(self) -> dict[str, list[float]]:
         return {f"rho{i + 1}": [lim.lo, lim.hi] for i, lim in enumerate(self.limits)}

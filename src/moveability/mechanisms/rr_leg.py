@@ -109,6 +109,80 @@ class RRLeg:
             Interval(lo[:, 1], hi[:, 1]) - (iv.sin(angles) * self.proximal + self.base[1]),
         ]
 
+    def row_partials(
+        self, lo: Array, hi: Array, angles: Interval
+    ) -> tuple[list[list[Interval]], list[Interval]]:
+        """Partial derivatives of the row of A, ``P - C(t)``, over boxes: along the
+        pose axes (``rows[j][k]``: the identity) and along the joint
+        (``-C'(t) = a (sin t, -cos t)``)."""
+        n = lo.shape[0]
+        one, zero = iv.as_interval(np.ones(n)), iv.as_interval(np.zeros(n))
+        a = self.proximal
+        return [[one, zero], [zero, one]], [iv.sin(angles) * a, -(iv.cos(angles) * a)]
+
+    def joint_gradient(self, lo: Array, hi: Array, branch: int, angles: Interval) -> list[Interval]:
+        """``dt/dP`` on a branch over boxes where the leg is regular (``angles`` its
+        enclosure): ``-(P - C) / (a ((P - C) x (cos t, sin t)))``, the constraint
+        differentiated."""
+        u = self.a_row_boxes(lo, hi, angles)
+        den = (u[0] * iv.sin(angles) - u[1] * iv.cos(angles)) * self.proximal
+        return [-(u[0] / den), -(u[1] / den)]
+
+    @property
+    def rotation_center(self) -> Array:
+        """Turning a pose about the base turns the whole leg: its reach and its
+        elbow stay, and its joint turns at the same rate."""
+        return np.asarray(self.base, dtype=np.float64)
+
+    def fold_flow(
+        self, lo: Array, hi: Array, status: NDArray[np.uint8], branch: int, direction: Array
+    ) -> tuple[NDArray[np.bool_], Interval]:
+        """Over boxes where the leg may fold (``status`` FOLD_OUTER or FOLD_INNER): whether
+        moving a pose along ``direction`` (k,) keeps it reachable, and an enclosure
+        of the rate of the joint of ``branch``.
+
+        The joint is ``t = theta + s alpha(rho)`` (``s = +1`` on branch 0, ``-1`` on
+        branch 1), with ``theta`` the direction and ``rho`` the distance of the
+        pose from the base; ``cos alpha = g(rho) = rho / 2a + (a^2 - b^2) / (2 a rho)``.
+        The rate ``d theta + s alpha'(rho) d rho`` is unbounded at the fold, where
+        ``alpha' = -g' / sin alpha`` and ``sin alpha`` falls to 0: its enclosure
+        keeps the lower bound ``1 / max sin alpha`` of ``1 / sin alpha``.
+        """
+        base = np.asarray(self.base)
+        d = np.asarray(direction, dtype=np.float64)
+        dx = Interval(lo[:, 0], hi[:, 0]) - base[0]
+        dy = Interval(lo[:, 1], hi[:, 1]) - base[1]
+        radial = dx * d[0] + dy * d[1]  # rho times d rho
+        turning = dx * d[1] - dy * d[0]  # rho^2 times d theta
+        outer = status == FOLD_OUTER
+        inner = status == FOLD_INNER
+        keeps = (outer & (radial.hi <= 0)) | (inner & (radial.lo >= 0))
+        a, b = self.proximal, self.distal
+        k = (iv.as_interval(a) * a - iv.as_interval(b) * b) / (2.0 * a)
+        rho2 = iv.square(dx) + iv.square(dy)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            rho = iv.sqrt(rho2)
+            slope = 1.0 / (2.0 * iv.as_interval(a)) - k / rho2  # g'(rho)
+            # sin alpha over the box, from the enclosure of alpha (at most pi)
+            near = np.clip(base[None, :], lo, hi)
+            far = np.where(np.abs(lo - base) > np.abs(hi - base), lo, hi)
+            near2 = iv.square(Interval(near[:, 0]) - base[0]) + iv.square(
+                Interval(near[:, 1]) - base[1]
+            )
+            far2 = iv.square(Interval(far[:, 0]) - base[0]) + iv.square(
+                Interval(far[:, 1]) - base[1]
+            )
+            sin_max = iv.sin(self._alpha(near2, far2)).hi
+            inverse = Interval(
+                np.where(sin_max > 0, np.nextafter(1.0 / np.maximum(sin_max, 1e-300), 0.0), 0.0),
+                np.full(lo.shape[0], np.inf),
+            )
+            alpha_rate = -(slope * inverse) * (radial / rho)
+            theta_rate = turning / rho2
+            sign = 1.0 if branch == 0 else -1.0
+            rate = theta_rate + alpha_rate * sign
+        return keeps, rate
+
     def serial_term(self, points: Array, angles: Array) -> Array:
         """The leg's term of B, ``-(P - C) x (C - base)``: zero at a serial singularity."""
         c = self.elbow(angles)

@@ -128,6 +128,18 @@ class RPRLeg:
             [-rby, rbx, -(rbx * px + rby * py)],
         ]
 
+    def row_partials(
+        self, lo: Array, hi: Array, angles: Interval
+    ) -> tuple[list[list[Interval]], list[Interval]]:
+        """Partial derivatives of the row of A: along x, y, phi (the row depends on the
+        pose alone), and none along the length."""
+        zero = iv.as_interval(np.zeros(lo.shape[0]))
+        return self.a_row_derivatives(lo, hi), [zero, zero, zero]
+
+    def joint_gradient(self, lo: Array, hi: Array, branch: int, angles: Interval) -> list[Interval]:
+        """``drho/dX = row / rho`` (``angles`` encloses rho)."""
+        return [r / angles for r in self.a_row_boxes(lo, hi, angles)]
+
     def reach(self, lo: Array, hi: Array) -> LegReach:
         """Every pose is reachable; REGULAR where the length certainly does not vanish."""
         dx, dy, _, _ = self._target_boxes(lo, hi)
@@ -208,7 +220,9 @@ class ThreeRPR(Mechanism):
             np.array([hi[0] + pad[0], hi[1] + pad[1], np.pi]),
         )
 
-    def det_a_boxes(self, lo: Array, hi: Array, angles: list[Interval]) -> Interval:
+    def det_a_boxes(
+        self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
+    ) -> Interval:
         """Enclosure of det A over boxes: the rows depend on the pose only, so the
         mean-value form ``D(c) + sum_j dD/dx_j(box) (x_j - c_j)`` about the centre
         ``c`` encloses it too; the narrower of the two (intersected) is kept."""

@@ -20,6 +20,7 @@ starts (:func:`local_cluster`) leave the variable out altogether.
 from __future__ import annotations
 
 import ctypes
+import functools
 import math
 import os
 import sys
@@ -100,8 +101,9 @@ def restore_malloc_thresholds() -> bool:
 def summarize(result: Any) -> Row:
     """The result columns of one analysis.
 
-    ``regions`` is the number of regions when every region is resolved
-    (``undecided["components"] == 0``), else ``None`` (unknown);
+    ``regions`` is the number of regions where it is proved, else ``None``
+    (unknown); ``regions_at_least`` and ``regions_at_most`` bound it
+    (``regions_at_most`` is ``None`` while no upper bound is proved);
     ``largest_share`` is a certified lower bound on the share of W covered by
     the largest region: its inner area over the outer area of W (``None`` when
     there is no region); ``n_connected`` is ``True``, ``False`` or ``None``.
@@ -109,9 +111,10 @@ def summarize(result: Any) -> Row:
     Examples
     --------
     >>> from moveability import analyze, load_spec
-    >>> row = summarize(analyze(load_spec("examples/five-bar-paper.toml"), precision=0.1))
+    >>> spec = load_spec("examples/five-bar-paper.toml")
+    >>> row = summarize(analyze(spec, precision=0.1, resolve=True))
     >>> row["regions"], row["n_connected"], round(row["largest_share"], 3)
-    (2, False, 0.928)
+    (2, False, 0.94)
     """
     # one entry, keyed by the measure's name (area in the plane)
     ((inner, outer),) = result.workspace.values()
@@ -120,7 +123,9 @@ def summarize(result: Any) -> Row:
     if regions and outer > 0:
         share = max(float(region.area[0]) for region in regions) / float(outer)
     return {
-        "regions": len(regions) if result.undecided["components"] == 0 else None,
+        "regions": result.n_regions,
+        "regions_at_least": result.count[0],
+        "regions_at_most": result.count[1],
         "workspace_inner": float(inner),
         "workspace_outer": float(outer),
         "largest_share": share,
@@ -153,7 +158,8 @@ def design_row(
     precision : float
         Precision of the analysis.
     analyze : callable, optional
-        The analysis, ``moveability.analyze`` by default.
+        The analysis; by default ``moveability.analyze`` with ``resolve=True``
+        (the cells that keep the count open are refined below the precision).
 
     Examples
     --------
@@ -168,7 +174,10 @@ def design_row(
     from .designs import apply_design
 
     if analyze is None:
-        from ..analysis import analyze as run
+        from ..analysis import analyze as analysis
+
+        # a sweep asks for counts: refine where they are open
+        run: Callable[..., Any] = functools.partial(analysis, resolve=True)
     else:
         run = analyze
     start = time.perf_counter()

@@ -40,6 +40,8 @@ __all__ = [
 #: the columns after the varied names, in order
 RESULT_COLUMNS = (
     "regions",
+    "regions_at_least",
+    "regions_at_most",
     "workspace_inner",
     "workspace_outer",
     "largest_share",
@@ -47,7 +49,7 @@ RESULT_COLUMNS = (
     "seconds",
     "error",
 )
-_INTEGERS = {"regions"}
+_INTEGERS = {"regions", "regions_at_least", "regions_at_most"}
 _BOOLEANS = {"n_connected"}
 _TEXTS = {"error"}
 
@@ -61,7 +63,7 @@ def table_columns(names: Sequence[str]) -> tuple[str, ...]:
     Examples
     --------
     >>> table_columns(["L1", "theta1.min"])[:4]
-    ('L1', 'theta1.min', 'regions', 'workspace_inner')
+    ('L1', 'theta1.min', 'regions', 'regions_at_least')
     """
     return (*names, *RESULT_COLUMNS)
 
@@ -290,8 +292,8 @@ class SweepTable:
     ...         table.append({"L1": 8.0, "regions": 2, "seconds": 0.5})
     ...     print(path.read_text().strip())
     ...     SweepTable(path, ["L1"]).is_done((8.0,))
-    L1,regions,workspace_inner,workspace_outer,largest_share,n_connected,seconds,error
-    8.0,2,,,,,0.5,
+    L1,regions,regions_at_least,regions_at_most,workspace_inner,workspace_outer,largest_share,n_connected,seconds,error
+    8.0,2,,,,,,,0.5,
     True
     """
 

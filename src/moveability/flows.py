@@ -1,0 +1,613 @@
+"""Flows along pose axes: the certificate that no region hides in the undecided cells.
+
+A region R_j is *hidden* when none of its configurations lies on a certified
+sheet: nothing in the certain graph stands for it, so a count of the certified
+parts says nothing of it. This module proves that no region is hidden in a
+node (leaf, posture) that is not certified, one sign of det A at a time.
+
+A node *flows* along a direction ``+e_k`` or ``-e_k`` of the pose box when,
+over the whole leaf, moving a pose along that direction never makes a valid
+configuration of the node invalid:
+
+* det A is certainly of the sign, or (every leg regular) its derivative along
+  the sheet in that direction is certainly of the sign (so |det A| never
+  decreases);
+* each joint whose enclosure may hold a lower stop never decreases, each one
+  that may hold an upper stop never increases (both: no flow);
+* a leg that may fold (a serial singularity in the leaf) stays reachable in
+  that direction (the leg's ``reach_flows``), its joint is certainly within
+  its limits and det A is certainly of the sign; the configurations of its
+  branch vary continuously up to the fold.
+
+From any valid configuration of such a node, the ray along the direction then
+stays valid until it leaves the leaf through the face on that side, where the
+configuration is a valid one of the same posture over a leaf across the face.
+A node is *attached* when it flows along a direction across which every leaf
+holds, for that posture and sign, a certified sheet, a node with no valid
+configuration of the sign, or a node attached before it. By induction on the
+order of attachment every valid configuration of an attached node joins a
+certified sheet by a path of valid configurations: its region is not hidden.
+A face on the edge of the (non-periodic) pose box attaches nothing.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from .intervals import Interval
+from .mechanisms.base import REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
+from .regions import split_legs
+from .sheets import SheetTable
+from .status import BOUNDARY, IN
+from .topology import adjacency
+from .tree import HyperTree
+
+__all__ = [
+    "FaceNeighbours",
+    "attached_nodes",
+    "dead_or_certified",
+    "face_neighbours",
+    "flow_conditions",
+    "flow_directions",
+]
+
+Array = NDArray[np.float64]
+
+
+class FaceNeighbours:
+    """Leaves across each face of each leaf.
+
+    Direction ``2 k`` is ``+e_k`` and ``2 k + 1`` is ``-e_k``. ``pairs[d]`` is an
+    (m, 2) array of leaf indices ``(a, b)``: ``b`` lies across ``a``'s face in
+    direction ``d`` (only leaves that are not OUT are listed). ``open[a, d]`` says
+    that face lies on the edge of the pose box.
+    """
+
+    def __init__(self, pairs: list[NDArray[np.int64]], open_faces: NDArray[np.bool_]) -> None:
+        self.pairs = pairs
+        self.open = open_faces
+
+
+def face_neighbours(tree: HyperTree) -> FaceNeighbours:
+    """Face neighbours of the leaves of ``tree`` that are not OUT, with their side.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability import HyperTree
+    >>> tree = HyperTree.from_array(np.ones((2, 2), dtype=bool), merge=False)
+    >>> faces = face_neighbours(tree)
+    >>> faces.pairs[0].tolist(), faces.open[0].tolist()  # across +x; leaf 0's faces
+    ([[0, 2], [1, 3]], [False, True, False, True])
+    """
+    k = tree.ndim
+    pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=1)
+    anchors = tree.anchors
+    sizes = tree.layout.cell_sizes(tree.levels)
+    extent = np.left_shift(np.int64(1), np.asarray(tree.max_depth, dtype=np.int64))
+    periodic = np.zeros(k, dtype=bool)
+    periodic[list(tree.periodic)] = True
+    ends = anchors + sizes
+    open_faces = np.zeros((len(tree), 2 * k), dtype=bool)
+    for axis in range(k):
+        if not periodic[axis]:
+            open_faces[:, 2 * axis] = ends[:, axis] == extent[axis]
+            open_faces[:, 2 * axis + 1] = anchors[:, axis] == 0
+    both = np.concatenate([pairs, pairs[:, ::-1]]) if pairs.size else pairs.reshape(0, 2)
+    a, b = both[:, 0], both[:, 1]
+    out: list[NDArray[np.int64]] = []
+    for axis in range(k):
+        end_a = ends[a, axis]
+        end_b = ends[b, axis]
+        if periodic[axis]:
+            end_a = end_a % extent[axis]
+            end_b = end_b % extent[axis]
+        plus = end_a == anchors[b, axis]
+        minus = anchors[a, axis] == end_b
+        out.append(both[plus].astype(np.int64))
+        out.append(both[minus].astype(np.int64))
+    return FaceNeighbours(out, open_faces)
+
+
+def flow_directions(k: int) -> tuple[NDArray[np.float64], list[list[int]]]:
+    """The constant directions tried, and the faces through which each leaves a box.
+
+    The ``2 k`` axis directions, then every diagonal of two axes (``+-e_i +- e_j``):
+    a ray along a diagonal leaves the box through one of two faces.
+
+    Examples
+    --------
+    >>> vectors, faces = flow_directions(2)
+    >>> vectors.tolist()[4], faces[4]
+    ([1.0, 1.0], [0, 2])
+    """
+    vectors: list[NDArray[np.float64]] = []
+    faces: list[list[int]] = []
+    for axis in range(k):
+        for step in (1.0, -1.0):
+            v = np.zeros(k)
+            v[axis] = step
+            vectors.append(v)
+            faces.append([2 * axis + int(step < 0)])
+    for i in range(k):
+        for j in range(i + 1, k):
+            for si in (1.0, -1.0):
+                for sj in (1.0, -1.0):
+                    v = np.zeros(k)
+                    v[i], v[j] = si, sj
+                    vectors.append(v)
+                    faces.append([2 * i + int(si < 0), 2 * j + int(sj < 0)])
+    return np.array(vectors), faces
+
+
+def _dot(values: list[Interval], velocity: list[Interval]) -> Interval:
+    """``sum_k values[k] * velocity[k]``."""
+    total = values[0] * velocity[0]
+    for a, b in zip(values[1:], velocity[1:], strict=True):
+        total = total + a * b
+    return total
+
+
+class _Field:
+    """A flow over boxes: its velocity, the faces it may leave through, and the leg
+    it turns rigidly (with that leg's joint rate), if any."""
+
+    def __init__(
+        self,
+        velocity: list[Interval],
+        faces: NDArray[np.uint8],
+        vector: NDArray[np.float64] | None = None,
+        leg: int = -1,
+        turn: float = 0.0,
+        usable: NDArray[np.bool_] | None = None,
+    ) -> None:
+        self.velocity = velocity
+        self.faces = faces
+        self.vector = vector
+        self.leg = leg
+        self.turn = turn
+        self.usable = usable
+
+
+def _fields(mechanism: Mechanism, lo: Array, hi: Array) -> list[_Field]:
+    """Constant directions, then turns about the legs' rotation centres (planar poses)."""
+    n, k = lo.shape
+    vectors, faces = flow_directions(k)
+    out = []
+    for vector, fl in zip(vectors, faces, strict=True):
+        mask = np.full(n, sum(1 << f for f in fl), dtype=np.uint8)
+        velocity = [Interval(np.full(n, v)) for v in vector]
+        out.append(_Field(velocity, mask, vector=vector))
+    if k != 2:
+        return out
+    for i, leg in enumerate(mechanism.legs):
+        centre = getattr(leg, "rotation_center", None)
+        if centre is None:
+            continue
+        rel_x = Interval(lo[:, 0], hi[:, 0]) - float(centre[0])
+        rel_y = Interval(lo[:, 1], hi[:, 1]) - float(centre[1])
+        # the orbit of a pose leaves a box that does not hold the centre
+        outside = ((centre[None, :] < lo) | (centre[None, :] > hi)).any(axis=1)
+        for turn in (1.0, -1.0):
+            velocity = [-rel_y * turn, rel_x * turn]
+            mask = np.zeros(n, dtype=np.uint8)
+            for axis in range(2):
+                mask |= np.where(velocity[axis].hi > 0, 1 << (2 * axis), 0).astype(np.uint8)
+                mask |= np.where(velocity[axis].lo < 0, 1 << (2 * axis + 1), 0).astype(np.uint8)
+            out.append(_Field(velocity, mask, leg=i, turn=turn, usable=outside))
+    return out
+
+
+def flow_conditions(
+    mechanism: Mechanism,
+    lo: Array,
+    hi: Array,
+    table: SheetTable,
+    nodes: NDArray[np.intp],
+    cross_serial: bool = True,
+) -> tuple[NDArray[np.uint64], NDArray[np.bool_], NDArray[np.uint8]]:
+    """Where the pieces of some nodes flow.
+
+    ``nodes`` is an (m, 2) array of (leaf, posture); ``lo``, ``hi`` and ``table``
+    describe all the leaves. A node's configurations are split by the piece of
+    each limited joint's range they lie in (its *slots*, as in
+    :func:`moveability.regions.region_graph`). The flows tried are the
+    directions of :func:`flow_directions` and, for planar poses, the turns about
+    each leg's ``rotation_center`` (both senses): a turn keeps that leg's reach
+    and turns its joint at rate +-1, even where the leg folds.
+
+    Where every leg is regular, one more flow per slot and sign follows the
+    constraints that may be active in the leaf: its direction is the sum of
+    their unit normals at the leaf's centre (det A of the sign, joints away from
+    the stops inside the slot), checked over the whole leaf like the others.
+    It settles corners where two constraint curves cross at a sharp angle.
+
+    Returns
+    -------
+    flows : (2, m, slots) uint64
+        Bit ``f`` set where the slot flows along flow ``f``; index 0 is
+        det A > 0, 1 det A < 0.
+    exists : (m, slots) bool
+        The slots that may hold configurations.
+    faces : (F, m) uint8
+        Bit ``j`` set where flow ``f`` may leave the node's leaf through face ``j``.
+    """
+    slots = 1 << len(split_legs(mechanism.limits))
+    k = len(mechanism.pose_names)
+    n_flows = len(flow_directions(k)[0]) + 2 * slots
+    if k == 2:
+        n_flows += 2 * sum(hasattr(leg, "rotation_center") for leg in mechanism.legs)
+    m = nodes.shape[0]
+    bits = np.zeros((2, m, slots), dtype=np.uint64)
+    exists = np.zeros((m, slots), dtype=bool)
+    faces = np.zeros((n_flows, m), dtype=np.uint8)
+    for p in range(table.status.shape[1]):
+        at = np.flatnonzero(nodes[:, 1] == p)
+        if not at.size:
+            continue
+        flows, ex, fc = _posture_flows(mechanism, lo, hi, table, nodes[at, 0], p, cross_serial)
+        weights = np.left_shift(np.uint64(1), np.arange(flows.shape[-1], dtype=np.uint64))
+        bits[:, at] = (flows.astype(np.uint64) * weights).sum(axis=-1, dtype=np.uint64)
+        exists[at] = ex
+        faces[:, at] = fc
+    return bits, exists, faces
+
+
+def _posture_flows(
+    mechanism: Mechanism,
+    lo: Array,
+    hi: Array,
+    table: SheetTable,
+    rows: NDArray[np.intp],
+    p: int,
+    cross_serial: bool,
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.uint8]]:
+    """The flows of the nodes of posture ``p`` over leaves ``rows``:
+    ``(flows (2, n, slots, F), exists (n, slots), faces (F, n))``."""
+    n_legs = len(mechanism.legs)
+    split = split_legs(mechanism.limits)
+    slots = 1 << len(split)
+    blo, bhi = lo[rows], hi[rows]
+    fields = _fields(mechanism, blo, bhi)
+    n_fixed = len(fields)
+    n_flows = n_fixed + 2 * slots
+    flows = np.zeros((2, rows.size, slots, n_flows), dtype=bool)
+    exists = np.zeros((rows.size, slots), dtype=bool)
+    faces = np.zeros((n_flows, rows.size), dtype=np.uint8)
+    for ff, field in enumerate(fields):
+        faces[ff] = field.faces
+    if not rows.size or not all(
+        hasattr(leg, "joint_gradient") and hasattr(leg, "row_partials") for leg in mechanism.legs
+    ):
+        return flows, exists, faces
+    leg_status = table.leg_status[rows]
+    regular = leg_status == REGULAR
+    folding = ~regular & (leg_status != REACH_UNKNOWN) & (leg_status != REACH_OUT)
+    usable = ~(leg_status == REACH_UNKNOWN).any(axis=1)
+    sign = table.sign[rows, p]
+    combos = [
+        [(c >> split.index(i)) & 1 if i in split else 0 for i in range(n_legs)]
+        for c in range(slots)
+    ]
+
+    def quiet() -> Any:
+        return np.errstate(invalid="ignore", divide="ignore", over="ignore")
+
+    branches = mechanism.postures[p]
+    angles = [
+        Interval(table.angles_lo[rows, p, i], table.angles_hi[rows, p, i]) for i in range(n_legs)
+    ]
+    with quiet():
+        gradients = [
+            leg.joint_gradient(blo, bhi, int(branches[i]), angles[i])  # type: ignore[attr-defined]
+            for i, leg in enumerate(mechanism.legs)
+        ]
+        known = mechanism.rows_and_partials(blo, bhi, angles)
+    pieces = [mechanism.limits[i].pieces(angles[i]) for i in range(n_legs)]
+    for c in range(slots):
+        exists[:, c] = np.logical_and.reduce([pieces[i][0][combos[c][i]] for i in range(n_legs)])
+    for ff, field in enumerate(fields):
+        with quiet():
+            ok = usable.copy() if field.usable is None else usable & field.usable
+            rising, falling, rates = [], [], []
+            for i, leg in enumerate(mechanism.legs):
+                if i == field.leg:
+                    # the whole leg turns: its reach stays, its joint turns with it
+                    up = np.full(rows.size, field.turn > 0)
+                    rates.append(Interval(np.full(rows.size, field.turn)))
+                    rising.append(up)
+                    falling.append(~up)
+                    continue
+                rate = _dot(gradients[i], field.velocity)
+                if folding[:, i].any():
+                    if cross_serial and field.vector is not None and hasattr(leg, "fold_flow"):
+                        keeps, fold_rate = leg.fold_flow(
+                            blo, bhi, leg_status[:, i], int(branches[i]), field.vector
+                        )
+                    else:
+                        keeps = np.zeros(rows.size, dtype=bool)
+                        fold_rate = Interval(np.full(rows.size, -np.inf), np.inf)
+                    ok &= regular[:, i] | keeps
+                    # where the leg folds its joint's rate is unbounded: the leg's own enclosure
+                    rate = Interval(
+                        np.where(regular[:, i], rate.lo, fold_rate.lo),
+                        np.where(regular[:, i], rate.hi, fold_rate.hi),
+                    )
+                up, down = rate.lo >= 0, rate.hi <= 0
+                if not cross_serial:
+                    ok &= regular[:, i]
+                rates.append(rate)
+                rising.append(up)
+                falling.append(down)
+            det_rate = mechanism.det_a_rate(
+                blo, bhi, angles, field.velocity, rates, rows_and_partials=known
+            )
+        if field.leg >= 0 and not cross_serial:
+            ok &= regular[:, field.leg]
+        for c in range(slots):
+            slot_ok = ok.copy()
+            for i in range(n_legs):
+                _, lower, upper = pieces[i]
+                j = combos[c][i]
+                slot_ok &= (~lower[j] | rising[i]) & (~upper[j] | falling[i])
+            for row, s in enumerate((1, -1)):
+                steady = sign == s
+                if det_rate is not None:
+                    steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
+                flows[row, :, c, ff] = slot_ok & steady
+    _adapted_flows(
+        mechanism, blo, bhi, p, angles, gradients, pieces, combos,
+        usable & regular.all(axis=1), sign, flows, faces, n_fixed, known,
+    )
+    return flows, exists, faces
+
+
+def _adapted_flows(
+    mechanism: Mechanism,
+    lo: Array,
+    hi: Array,
+    p: int,
+    angles: list[Interval],
+    gradients: list[list[Interval]],
+    pieces: list[tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_]]],
+    combos: list[list[int]],
+    usable: NDArray[np.bool_],
+    sign: NDArray[np.int8],
+    flows: NDArray[np.bool_],
+    faces: NDArray[np.uint8],
+    first: int,
+    known: Any,
+) -> None:
+    """The flows along each leaf's own direction (see :func:`flow_conditions`),
+    written into ``flows`` and ``faces`` from index ``first``, one per slot and sign."""
+    n, k = lo.shape
+    n_legs = len(mechanism.legs)
+    if not usable.any():
+        return
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        # normals at the centre: narrow enclosures of the gradients there
+        mid = 0.5 * (lo + hi)
+        centre_angles = [Interval(a.mid) for a in angles]
+        joint_at = [
+            leg.joint_gradient(mid, mid, int(mechanism.postures[p][i]), centre_angles[i])  # type: ignore[attr-defined]
+            for i, leg in enumerate(mechanism.legs)
+        ]
+        det_at = []
+        for axis in range(k):
+            along = [Interval(np.full(n, float(axis == j))) for j in range(k)]
+            rate = mechanism.det_a_rate(
+                mid, mid, centre_angles, along, [joint_at[i][axis] for i in range(n_legs)]
+            )
+            if rate is None:
+                return
+            det_at.append(rate.mid)
+        det_normal = np.stack(det_at, axis=1)
+        joint_normal = [np.stack([g.mid for g in joint_at[i]], axis=1) for i in range(n_legs)]
+
+    def unit(v: Array) -> Array:
+        norm = np.linalg.norm(v, axis=1, keepdims=True)
+        good = (norm > 0) & np.isfinite(norm)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(good, v / np.where(good, norm, 1.0), 0.0)
+
+    for c in range(len(combos)):
+        for row, s in enumerate((1, -1)):
+            direction = np.where((sign == 0)[:, None], unit(s * det_normal), 0.0)
+            for i in range(n_legs):
+                _, lower, upper = pieces[i]
+                j = combos[c][i]
+                direction = direction + np.where(lower[j][:, None], unit(joint_normal[i]), 0.0)
+                direction = direction - np.where(upper[j][:, None], unit(joint_normal[i]), 0.0)
+            direction = unit(direction)
+            moving = usable & (np.abs(direction).sum(axis=1) > 0)
+            if not moving.any():
+                continue
+            velocity = [Interval(direction[:, axis]) for axis in range(k)]
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                rates = [_dot(gradients[i], velocity) for i in range(n_legs)]
+                det_rate = mechanism.det_a_rate(
+                    lo, hi, angles, velocity, rates, rows_and_partials=known
+                )
+            ok = moving.copy()
+            for i in range(n_legs):
+                _, lower, upper = pieces[i]
+                j = combos[c][i]
+                ok &= (~lower[j] | (rates[i].lo >= 0)) & (~upper[j] | (rates[i].hi <= 0))
+            steady = sign == s
+            if det_rate is not None:
+                steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
+            index = first + 2 * c + row
+            flows[row, :, c, index] = ok & steady
+            mask = np.zeros(n, dtype=np.uint8)
+            for axis in range(k):
+                mask |= np.where(direction[:, axis] > 0, 1 << (2 * axis), 0).astype(np.uint8)
+                mask |= np.where(direction[:, axis] < 0, 1 << (2 * axis + 1), 0).astype(np.uint8)
+            faces[index] = mask
+
+
+@njit(cache=True, nogil=True)
+def _attach_slots(
+    bits: NDArray[np.uint64], slot_done: NDArray[np.bool_], r: int, d: int
+) -> int:  # pragma: no cover - compiled
+    """Mark done the slots of row ``r`` that flow along ``d``; returns how many."""
+    count = 0
+    for c in range(bits.shape[1]):
+        if (bits[r, c] >> np.uint64(d)) & np.uint64(1) and not slot_done[r, c]:
+            slot_done[r, c] = True
+            count += 1
+    return count
+
+
+@njit(cache=True, nogil=True)
+def _propagate(
+    done: NDArray[np.bool_],
+    node_row: NDArray[np.int64],
+    row_leaf: NDArray[np.int64],
+    row_post: NDArray[np.int64],
+    bits: NDArray[np.uint64],
+    slot_done: NDArray[np.bool_],
+    waiting: NDArray[np.int64],
+    faces: NDArray[np.uint8],
+    back_ptr: NDArray[np.int64],
+    back_src: NDArray[np.int64],
+) -> NDArray[np.int64]:  # pragma: no cover - compiled
+    """Attach rows in order; returns the round of each row (-1: not attached)."""
+    n, _n_post = done.shape
+    m, n_slots = bits.shape
+    n_flows = faces.shape[0]
+    n_faces = back_ptr.size // (n + 1)
+    order = np.full(m, -1, dtype=np.int64)
+    left = np.zeros(m, dtype=np.int64)
+    for r in range(m):
+        for c in range(n_slots):
+            if not slot_done[r, c]:
+                left[r] += 1
+    queue = np.empty(m, dtype=np.int64)
+    tail = 0
+    for r in range(m):
+        if done[row_leaf[r], row_post[r]]:
+            continue
+        for d in range(n_flows):
+            if waiting[d, r] == 0:
+                left[r] -= _attach_slots(bits, slot_done, r, d)
+        if left[r] == 0:
+            done[row_leaf[r], row_post[r]] = True
+            order[r] = 0
+            queue[tail] = r
+            tail += 1
+    head = 0
+    while head < tail:
+        r0 = queue[head]
+        head += 1
+        leaf = row_leaf[r0]
+        p = row_post[r0]
+        for f in range(n_faces):
+            bit = np.uint8(1 << f)
+            for j in range(back_ptr[f * (n + 1) + leaf], back_ptr[f * (n + 1) + leaf + 1]):
+                src = back_src[j]
+                if done[src, p]:
+                    continue
+                r = node_row[src, p]
+                if r < 0:
+                    continue
+                for d in range(n_flows):
+                    if (faces[d, r] & bit) == 0:
+                        continue
+                    waiting[d, r] -= 1
+                    if waiting[d, r] == 0:
+                        left[r] -= _attach_slots(bits, slot_done, r, d)
+                if left[r] == 0:
+                    done[src, p] = True
+                    order[r] = order[r0] + 1
+                    queue[tail] = r
+                    tail += 1
+    return order
+
+
+def attached_nodes(
+    done: NDArray[np.bool_],
+    nodes: NDArray[np.intp],
+    bits: NDArray[np.uint64],
+    exists: NDArray[np.bool_],
+    faces: NDArray[np.uint8],
+    neighbours: FaceNeighbours,
+) -> NDArray[np.bool_]:
+    """The nodes (leaf, posture) attached for one sign.
+
+    Parameters
+    ----------
+    done : (n, P) bool
+        Nodes that need no certificate: certified for the sign, or holding no
+        valid configuration of it.
+    nodes : (m, 2) int
+        The nodes whose flows are given, as (leaf, posture); every node that is
+        not done must be among them.
+    bits, exists, faces
+        Their flows for the sign, slots and exit faces (see :func:`flow_conditions`).
+    neighbours : FaceNeighbours
+        The tree's face neighbours.
+
+    Notes
+    -----
+    Linear in the number of (node, flow, neighbour) triples: each node keeps
+    per flow the count of its neighbours not yet done, and its slots attach
+    when one count reaches zero.
+    """
+    n, n_post = done.shape
+    m = nodes.shape[0]
+    n_faces = neighbours.open.shape[1]
+    leaf, post = nodes[:, 0].astype(np.int64), nodes[:, 1].astype(np.int64)
+    node_row = np.full((n, n_post), -1, dtype=np.int64)
+    node_row[leaf, post] = np.arange(m)
+    per_face = np.zeros((n_faces, m), dtype=np.int64)
+    back_ptr = np.zeros(n_faces * (n + 1), dtype=np.int64)
+    back_src: list[NDArray[np.int64]] = []
+    offset = 0
+    for f in range(n_faces):
+        pairs = neighbours.pairs[f]
+        a, b = pairs[:, 0], pairs[:, 1]
+        for p in range(n_post):
+            at = np.flatnonzero(post == p)
+            if at.size:
+                count = np.bincount(a, weights=~done[b, p], minlength=n)
+                per_face[f, at] = count[leaf[at]].astype(np.int64)
+        # a face on the edge of the box can never be crossed
+        per_face[f][neighbours.open[leaf, f]] = np.iinfo(np.int64).max // 64
+        order = np.argsort(b, kind="stable")
+        counts = np.bincount(b, minlength=n)
+        back_ptr[f * (n + 1)] = offset
+        back_ptr[f * (n + 1) + 1 : (f + 1) * (n + 1)] = offset + np.cumsum(counts)
+        back_src.append(a[order])
+        offset += a.size
+    waiting = np.zeros((faces.shape[0], m), dtype=np.int64)
+    for d in range(faces.shape[0]):
+        for f in range(n_faces):
+            waiting[d] += np.where((faces[d] >> f) & 1 == 1, per_face[f], 0)
+    src = np.concatenate(back_src) if back_src else np.zeros(0, dtype=np.int64)
+    slot_done = ~exists | done[leaf, post][:, None]
+    state = done.copy()
+    _propagate(
+        state,
+        node_row,
+        leaf,
+        post,
+        np.ascontiguousarray(bits),
+        np.ascontiguousarray(slot_done),
+        waiting,
+        np.ascontiguousarray(faces),
+        back_ptr,
+        src.astype(np.int64),
+    )
+    return state & ~done
+
+
+def dead_or_certified(table: SheetTable, s: int, cross_serial: bool = True) -> NDArray[np.bool_]:
+    """(n, P): nodes certified with det A of sign ``s``, or with no valid configuration
+    of that sign (OUT, the other sign certainly, or det A identically zero)."""
+    group = table.group if cross_serial else np.zeros_like(table.group)
+    certified = ((table.status == IN) | group) & (table.sign == s)
+    return certified | ~table.may_hold(s)
