@@ -76,7 +76,7 @@ def main() -> None:
     )
     for growth in (2.0, 12.0):
         start = time.perf_counter()
-        result = analyze(gap, precision=0.05, resolve_growth=growth)
+        result = analyze(gap, precision=0.05, resolve=True, resolve_growth=growth)
         print(
             f"gap five-bar at 0.05, resolve_growth={growth:g}: count {result.count} "
             f"in {time.perf_counter() - start:.1f} s, {len(result.tree)} leaves"
