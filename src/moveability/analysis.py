@@ -366,7 +366,7 @@ class Analysis:
             limits=mechanism.limits,
             reachable_contact=_reachable_contact(mechanism, leaves, self.table, pairs),
         )
-        self._attach(None if flows_of is None else (flows_of[0]._flows, flows_of[1]))
+        self._attach(leaves, None if flows_of is None else (flows_of[0]._flows, flows_of[1]))
         self._resolve()
 
     @property
@@ -375,17 +375,17 @@ class Analysis:
         return ", ".join(f"{v:g}" for v in np.atleast_1d(self.precision))
 
     # ------------------------------------------------------------ regions
-    def _attach(self, reuse: tuple[Any, NDArray[np.intp]] | None = None) -> None:
+    def _attach(self, leaves: Any, reuse: tuple[Any, NDArray[np.intp]] | None = None) -> None:
         """Nodes whose every valid configuration joins a certified sheet (see
         :mod:`moveability.flows`); the others, alive and uncertified, are *open*:
         a region might hide there. ``reuse`` carries the flows of an analysis
-        this one refines, with the old index of each leaf (-1 for new ones)."""
+        this one refines, with the old index of each leaf (-1 for new ones);
+        ``leaves`` are the tree's leaves."""
         t = self.table
         cross = not self.generalized_aspects
         done = [dead_or_certified(t, s, cross) for s in (1, -1)]
         nodes = np.argwhere(~done[0] | ~done[1])
         n, n_post = t.status.shape
-        leaves = self.tree.leaves()
         if reuse is None:
             bits, exists, faces = flow_conditions(
                 self.mechanism, leaves.lo, leaves.hi, t, nodes, cross

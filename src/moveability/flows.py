@@ -237,10 +237,8 @@ def flow_conditions(
         Bit ``j`` set where flow ``f`` may leave the node's leaf through face ``j``.
     """
     slots = 1 << len(split_legs(mechanism.limits))
-    k = len(mechanism.pose_names)
-    n_flows = len(flow_directions(k)[0]) + 2 * slots
-    if k == 2:
-        n_flows += 2 * sum(hasattr(leg, "rotation_center") for leg in mechanism.legs)
+    # the fixed flows are the same for every leaf: count them on no leaf at all
+    n_flows = len(_fields(mechanism, lo[:0], hi[:0])) + 2 * slots
     m = nodes.shape[0]
     bits = np.zeros((2, m, slots), dtype=np.uint64)
     exists = np.zeros((m, slots), dtype=bool)
