@@ -230,8 +230,8 @@ def test_areas_bracket_a_grid_estimate_and_tighten(case):
     for r in result.regions:
         estimate = cell * sum(1 for rs in regions if rs & mapping[r.id])
         assert r.area[0] - slack <= estimate <= r.area[1] + slack
-    coarse = analyze(m, precision=0.3)
-    fine = analyze(m, precision=0.05)
+    coarse = analyze(m, precision=0.3, resolve=False)
+    fine = analyze(m, precision=0.05, resolve=False)
     widths = [x.workspace["area"][1] - x.workspace["area"][0] for x in (coarse, result, fine)]
     assert widths[0] > widths[1] > widths[2]
 
@@ -240,7 +240,7 @@ def test_regions_do_not_change_with_precision(case):
     m, _, result = case
     summaries = []
     for eps in (0.2, 0.1, 0.05):
-        r = analyze(m, precision=eps)
+        r = analyze(m, precision=eps, resolve=False)
         summaries.append(
             sorted((x.sign, round(0.5 * (x.area[0] + x.area[1]), 0)) for x in r.regions)
         )

@@ -131,7 +131,8 @@ def test_cli_plot_files(tmp_path):
     for name, ext in (("workspace", "svg"), ("regions", "png"), ("joint-space", "png")):
         out = tmp_path / f"{name}.{ext}"
         done = runner.invoke(
-            main, ["plot", SPEC, "--figure", name, "--out", str(out), "--precision", "0.3"]
+            main,
+            ["plot", SPEC, "--figure", name, "--out", str(out), "-p", "0.3", "--no-resolve"],
         )
         assert done.exit_code == 0, done.output
         head = out.read_bytes()[:8]

@@ -120,9 +120,9 @@ def count_designs(monkeypatch):
     calls = []
     original = runner_module.design_row
 
-    def counted(spec, names, values, precision, analyze=None):
+    def counted(spec, names, values, precision, analyze=None, resolve=True):
         calls.append(tuple(values))
-        return original(spec, names, values, precision, analyze)
+        return original(spec, names, values, precision, analyze, resolve)
 
     monkeypatch.setattr(runner_module, "design_row", counted)
     return calls

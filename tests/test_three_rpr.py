@@ -92,7 +92,8 @@ class GridReference:
 @pytest.fixture(scope="module", params=range(len(DESIGNS)))
 def case(request):
     m = _mechanism(DESIGNS[request.param])
-    result = analyze(m, precision=(1.0, 1.0, 0.15))
+    # the plain pass: its certified cells are compared with a grid's components
+    result = analyze(m, precision=(1.0, 1.0, 0.15), resolve=False)
     return result, GridReference(m)
 
 

@@ -16,13 +16,24 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import shortest_path
 
 from .errors import InvalidParameterError, ResolutionError
-from .flows import attached_nodes, dead_or_certified, face_neighbours, flow_conditions
+from .flows import (
+    attached_nodes,
+    dead_or_certified,
+    face_neighbours,
+    flow_conditions,
+    slot_spans,
+    supports_flows,
+)
+from .intervals import Interval
 from .keys import MAX_KEY_BITS
+from .limits import INSIDE
 from .measurement import leaf_volumes, locate
 from .mechanisms import Mechanism, from_spec
-from .mechanisms.base import FOLD_INNER, FOLD_OUTER, REGULAR
+from .mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR
 from .regions import RegionGraph, region_graph
 from .sheets import SheetTable, classify_sheets, stack_tables
 from .status import BOUNDARY, IN, OUT
@@ -125,7 +136,7 @@ def analyze(
     max_leaves: int = 1 << 23,
     progress: Progress | None = None,
     generalized_aspects: bool = False,
-    resolve: bool = False,
+    resolve: bool = True,
     resolve_levels: int = RESOLVE_LEVELS,
     resolve_growth: float = RESOLVE_GROWTH,
 ) -> Analysis:
@@ -148,8 +159,10 @@ def analyze(
         changes.
     resolve : bool, optional
         After the pass at the precision, refine below it, one level a round,
-        only the leaves that keep the count of regions open (see
-        :func:`resolve_analysis`); False (the default) keeps the plain pass.
+        only the leaves that keep the count of regions or N-connectivity open
+        (see :func:`resolve_analysis`); the default. False keeps the plain
+        pass. Mechanisms whose legs give no rates (see
+        :func:`moveability.flows.supports_flows`) keep the plain pass.
     resolve_levels : int, optional
         Levels below the precision that the resolution may reach.
     resolve_growth : float, optional
@@ -180,6 +193,8 @@ def analyze(
     if not (np.isfinite(resolve_growth) and resolve_growth >= 0):
         raise InvalidParameterError("resolve_growth", "a number >= 0", resolve_growth)
     # the levels below the precision must fit in the keys too
+    # without flows (legs given by constraints alone) no refinement can prove a bound
+    resolve = bool(resolve) and supports_flows(mechanism)
     extra = min(int(resolve_levels), (MAX_KEY_BITS - sum(depths)) // len(depths)) if resolve else 0
 
     def classify(cell_lo: NDArray[np.float64], cell_hi: NDArray[np.float64]) -> NDArray[np.uint8]:
@@ -257,34 +272,57 @@ def resolve_analysis(
         n_split = int(mask.sum())
         if not n_split:
             return result
-        children: list[SheetTable] = []
-
-        def classify(
-            lo: NDArray[np.float64], hi: NDArray[np.float64], found: list[SheetTable] = children
-        ) -> NDArray[np.uint8]:
-            found.append(classify_sheets(mechanism, lo, hi))
-            return found[-1].statuses()
-
-        finer = tree.refine(mask, classify)
-        # kept leaves stay in order among the new ones; children come in key order (a
-        # child's key lies in its parent's range, apart from every kept leaf's)
-        is_child = ~np.isin(finer.keys, tree.keys[~mask])
-        table = stack_tables([result.table.take(np.flatnonzero(~mask)), children[0]])
-        order = np.empty(len(finer), dtype=np.intp)
-        order[~is_child] = np.arange(int((~is_child).sum()))
-        order[is_child] = int((~is_child).sum()) + np.arange(int(is_child.sum()))
+        finer, table, old_index = _split(mechanism, tree, result.table, mask)
+        # a leaf where a region may hide is split twice: such leaves tend to stay
+        # open for several levels, and each round costs the whole tree
+        # a child's parent is the leaf of the coarser tree whose key range holds its key
+        child = np.flatnonzero(old_index < 0)
+        parent = np.searchsorted(tree.keys, finer.keys[child], side="right") - 1
+        again = np.zeros(len(finer), dtype=bool)
+        again[child] = (mask & hiding)[parent]
+        again &= finer.levels < finer.layout.n_levels
+        room = (max_leaves - len(finer)) // ((1 << tree.ndim) - 1)
+        if 0 < int(again.sum()) <= room:
+            finer, table, second = _split(mechanism, finer, table, again)
+            old_index = np.where(second >= 0, old_index[np.maximum(second, 0)], -1)
         if progress is not None:
             progress(int(finer.levels.max()), n_split, len(finer))
-        old_index = np.full(len(finer), -1, dtype=np.intp)
-        old_index[~is_child] = np.flatnonzero(~mask)
         result = Analysis(
             mechanism,
             result.precision,
             finer,
             generalized_aspects=result.generalized_aspects,
-            table=table.take(order),
+            table=table,
             flows_of=(result, old_index),
         )
+
+
+def _split(
+    mechanism: Mechanism, tree: HyperTree, table: SheetTable, mask: NDArray[np.bool_]
+) -> tuple[HyperTree, SheetTable, NDArray[np.intp]]:
+    """Split the leaves of ``mask`` once: the finer tree, its sheet table (kept
+    leaves keep their rows, children are classified) and each leaf's index in
+    ``tree`` (-1 for children)."""
+    children: list[SheetTable] = []
+
+    def classify(
+        lo: NDArray[np.float64], hi: NDArray[np.float64], found: list[SheetTable] = children
+    ) -> NDArray[np.uint8]:
+        found.append(classify_sheets(mechanism, lo, hi))
+        return found[-1].statuses()
+
+    finer = tree.refine(mask, classify)
+    # kept leaves stay in order among the new ones; children come in key order (a
+    # child's key lies in its parent's range, apart from every kept leaf's)
+    is_child = ~np.isin(finer.keys, tree.keys[~mask])
+    stacked = stack_tables([table.take(np.flatnonzero(~mask)), children[0]])
+    n_kept = int((~is_child).sum())
+    order = np.empty(len(finer), dtype=np.intp)
+    order[~is_child] = np.arange(n_kept)
+    order[is_child] = n_kept + np.arange(int(is_child.sum()))
+    old_index = np.full(len(finer), -1, dtype=np.intp)
+    old_index[~is_child] = np.flatnonzero(~mask)
+    return finer, stacked.take(order), old_index
 
 
 def _reachable_contact(
@@ -308,6 +346,67 @@ def _reachable_contact(
     folds = (status == FOLD_OUTER) | (status == FOLD_INNER)
     out[idx] = real & (regular | folds).all(axis=1) & ((~regular).sum(axis=1) <= 1)
     return out
+
+
+def _necks(
+    pairs: NDArray[np.intp], gap: NDArray[np.bool_], source: NDArray[np.int64], slack: int
+) -> NDArray[np.bool_]:
+    """Gap leaves on the shortest chains of touching leaves between parts.
+
+    ``source`` gives the part of the leaves that hold one (-1 elsewhere). One
+    breadth-first search from every part at once, through gap leaves, labels
+    each leaf with its nearest part; where leaves of two labels touch, a chain
+    joins the two parts through them. For each pair of parts the chains within
+    ``slack`` leaves of the shortest are kept, and their gap leaves returned.
+    """
+    n = gap.size
+    out = np.zeros(n, dtype=bool)
+    seeds = np.flatnonzero(source >= 0)
+    through = gap | (source >= 0)
+    keep = through[pairs[:, 0]] & through[pairs[:, 1]]
+    a, b = pairs[keep, 0], pairs[keep, 1]
+    rows = np.concatenate([a, np.full(seeds.size, n)])
+    cols = np.concatenate([b, seeds])
+    graph = coo_matrix(
+        (np.ones(rows.size, dtype=np.int8), (rows, cols)), shape=(n + 1, n + 1)
+    ).tocsr()
+    dist, pred = shortest_path(
+        graph, directed=False, unweighted=True, indices=n, return_predecessors=True
+    )
+    reached = np.isfinite(dist[:n])
+    hops = np.where(reached, dist[:n] - 1.0, np.inf)
+    label = np.where(source >= 0, source, -1)
+    # labels flow from the seeds outward, one distance at a time
+    order = np.flatnonzero(reached & (source < 0))
+    order = order[np.argsort(hops[order], kind="stable")]
+    levels = hops[order]
+    cuts = np.flatnonzero(np.diff(levels)) + 1
+    for chunk in np.split(order, cuts):
+        label[chunk] = label[pred[chunk]]
+    meet = (label[a] >= 0) & (label[b] >= 0) & (label[a] != label[b])
+    if not meet.any():
+        return out
+    a, b = a[meet], b[meet]
+    length = hops[a] + hops[b]
+    low, high = np.minimum(label[a], label[b]), np.maximum(label[a], label[b])
+    pair_key = low * (int(label.max()) + 1) + high
+    shortest = np.full(int(pair_key.max()) + 1, np.inf)
+    np.minimum.at(shortest, pair_key, length)
+    near = length <= shortest[pair_key] + slack
+    # walk back from both ends of each kept contact to its parts
+    walk = np.unique(np.concatenate([a[near], b[near]]))
+    while walk.size:
+        out[walk] = True
+        walk = walk[source[walk] < 0]
+        walk = np.unique(pred[walk])
+        walk = walk[(walk >= 0) & (walk < n) & ~out[walk]]
+    # and the gap leaves touching the chains (parts that touch have chains of
+    # their own leaves alone)
+    pa, pb = pairs[:, 0], pairs[:, 1]
+    grown = out.copy()
+    grown[pb[out[pa]]] = True
+    grown[pa[out[pb]]] = True
+    return grown & gap
 
 
 def count_text(at_least: int, at_most: int | None, noun: str = "region") -> str:
@@ -414,54 +513,50 @@ class Analysis:
             )
             bits[:, fresh], exists[fresh], faces[:, fresh] = new_bits, new_exists, new_faces
         self._flows = (nodes, bits, exists, faces, n)
+        self._spans = slot_spans(t, nodes, self.mechanism.limits)
         neighbours = face_neighbours(self.tree)
+        self._neighbours = neighbours
         #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1)
         self.open_nodes = np.zeros((2, n, n_post), dtype=bool)
         for row in (0, 1):
-            attached = attached_nodes(done[row], nodes, bits[row], exists, faces, neighbours)
+            attached = attached_nodes(
+                done[row], nodes, bits[row], exists, faces, neighbours, self._spans
+            )
             self.open_nodes[row] = ~done[row] & ~attached
 
-    def open_leaves(self, hops: int = 2) -> NDArray[np.bool_]:
+    def open_leaves(self, slack: int = 2) -> NDArray[np.bool_]:
         """Leaves that keep the count of regions open.
 
-        Those holding an open node (a region might hide there), and the *necks*:
-        in a possible component that holds several certified parts, the leaves
-        with uncertified nodes of that component within ``hops`` touching leaves
-        of its certified parts other than the largest (refined, those parts join
-        the largest there, or the component splits).
+        Those holding an open node (a region might hide there); while
+        N-connectivity is unknown, those of W where no region is known to hold
+        every pose; and the *necks*: in a possible component that holds several
+        certified parts, the leaves with uncertified nodes of that component on
+        the shortest chains of touching leaves (within ``slack`` more leaves)
+        between two certified parts whose nearest leaves touch. Refined, the
+        parts join there, or the chains get longer until the component splits.
         """
         mask = np.asarray(self.open_nodes.any(axis=(0, 2)), dtype=bool)
+        if self.n_connected is None:
+            mask |= self._w_open
         g, t = self.graph, self.table
         n, n_post = t.status.shape
         certified = (t.status == IN) | t.group
         sizes = np.bincount(g.certain[g.certain >= 0], minlength=g.certain_sign.size)
-        a, b = self._pairs[:, 0], self._pairs[:, 1]
         for row in (0, 1):
             sign = (1, -1)[row]
             of_sign = np.flatnonzero(g.certain_sign == sign)
             owner = self._certain_to_possible[of_sign]
-            if np.bincount(owner, minlength=g.n_possible[row]).max(initial=0) < 2:
-                continue
-            # the largest certified part of each possible component stays as it is
-            largest = np.full(g.n_possible[row], -1, dtype=np.int64)
-            order = np.lexsort((sizes[of_sign], owner))
-            largest[owner[order]] = of_sign[order]
-            small = np.zeros(g.certain_sign.size, dtype=bool)
-            small[of_sign] = largest[owner] != of_sign
+            per = np.bincount(owner, minlength=g.n_possible[row])
             labels = g.possible[row].reshape(n, n_post, g.slots)
-            crowded = np.zeros(g.n_possible[row], dtype=bool)
-            crowded[owner[small[of_sign]]] = True
-            in_crowded = (crowded[np.maximum(labels, 0)] & (labels >= 0)).any(axis=2)
-            gap = np.asarray((in_crowded & ~certified).any(axis=1), dtype=bool)
-            near = np.asarray(
-                (small[np.maximum(g.certain, 0)] & (g.certain >= 0)).any(axis=1), dtype=bool
-            )
-            for _ in range(hops):
-                step = near.copy()
-                step[b[near[a] & gap[b]]] = True
-                step[a[near[b] & gap[a]]] = True
-                near = step
-            mask |= near & gap
+            for u in np.flatnonzero(per >= 2):
+                parts = of_sign[owner == u]
+                gap = ((labels == u).any(axis=2) & ~certified).any(axis=1)
+                # the part of each leaf holding one (the smallest where several: a
+                # small part sharing the leaves of a large one keeps its own)
+                source = np.full(n, -1, dtype=np.int64)
+                for i in np.argsort(-sizes[parts], kind="stable"):
+                    source[(g.certain == parts[i]).any(axis=1)] = i
+                mask |= _necks(self._pairs, gap, source, slack)
         return mask
 
     def _resolve(self) -> None:
@@ -507,6 +602,8 @@ class Analysis:
         self._w_certain, self._w_possible = w_certain, w_possible
         self.regions: list[Region] = []
         self._region_nodes: list[tuple[int, int, int]] = []  # (certain id, row, possible id)
+        #: leaves that keep some W_Nj = W open
+        self._w_open = np.zeros(len(self.areas), dtype=bool)
         for rid, (_, c, code) in enumerate(regions):
             row, u = divmod(code, 1 << 40)
             in_c = g.certain == c
@@ -514,12 +611,14 @@ class Analysis:
             touch = (g.possible[row] == u).any(axis=1)
             outer = float(self.areas[touch].sum())
             covered = (in_c & ((t.status == IN) | t.group)).any(axis=1)
-            if not (w_possible & ~covered).any():
-                equals: bool | None = True
-            elif (w_certain & ~touch).any():
-                equals = False
+            if (w_certain & ~touch).any():
+                equals: bool | None = False
             else:
-                equals = None
+                uncovered = w_possible & ~covered
+                if uncovered.any():
+                    uncovered &= ~self._held_by(c, row, uncovered)
+                equals = None if uncovered.any() else True
+                self._w_open |= uncovered
             used = np.flatnonzero(in_c.any(axis=0))
             self.regions.append(
                 Region(
@@ -535,6 +634,47 @@ class Analysis:
             self._region_nodes.append((c, row, u))
         del n_post
 
+    def _held_by(self, c: int, row: int, leaves: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        """Of ``leaves``, those where every pose of W (but a set of measure zero)
+        has a configuration in the region of certified part ``c`` (sign row ``row``).
+
+        A node is *attached to c alone* when its flows (see
+        :mod:`moveability.flows`) lead every valid configuration to certified
+        sheets of ``c`` through nodes attached the same way. A leaf qualifies
+        when one of its nodes is certified in ``c`` or attached to c alone, has
+        det A of the region's sign throughout and every joint within its limits
+        throughout: every pose of W over the leaf (every leg reaches it) then
+        has that posture's configuration, in the region. It also qualifies
+        when no node holds a valid configuration of the other sign, no
+        identically singular posture holds a valid configuration and every node
+        of the region's sign is certified in ``c``, attached to c alone or holds
+        no valid configuration: the poses left out are those whose every valid
+        configuration is singular, on the singular curves.
+        """
+        g, t = self.graph, self.table
+        s = (1, -1)[row]
+        cross = not self.generalized_aspects
+        group = t.group if cross else np.zeros_like(t.group)
+        in_c = (g.certain == c) & ((t.status == IN) | group)
+        done = in_c | ~t.may_hold(s)
+        nodes, bits, exists, faces, _ = self._flows
+        attached = attached_nodes(
+            done, nodes, bits[row], exists, faces, self._neighbours, self._spans
+        )
+        ok = (done | attached) & ~t.may_hold(-s) & ~(t.singular & (t.status != OUT))
+        legs = t.leg_status
+        reached = ~((legs == REACH_UNKNOWN) | (legs == REACH_OUT)).any(axis=1)
+        # every configuration of the posture within the limits: a range of a whole
+        # turn holds every angle (its stop only cuts the sheet in two pieces)
+        valid = np.ones(t.status.shape, dtype=bool)
+        for i, limit in enumerate(self.mechanism.limits):
+            if limit.periodic or (not limit.prismatic and limit.hi - limit.lo >= 2 * np.pi):
+                continue
+            angles = Interval(t.angles_lo[:, :, i].ravel(), t.angles_hi[:, :, i].ravel())
+            valid &= (limit.classify(angles) == INSIDE).reshape(valid.shape)
+        spans = (in_c | attached) & valid & (t.sign == s) & reached[:, None]
+        return np.asarray(leaves & (ok.all(axis=1) | spans.any(axis=1)), dtype=bool)
+
     @property
     def count(self) -> tuple[int, int | None]:
         """Certified bounds ``(at_least, at_most)`` on the number of regions.
@@ -548,9 +688,9 @@ class Analysis:
         --------
         >>> from moveability import analyze
         >>> from moveability.mechanisms import FiveBar
-        >>> analyze(FiveBar(7, 8, 5, 8, 5), precision=0.1).count
+        >>> analyze(FiveBar(7, 8, 5, 8, 5), precision=0.1, resolve=False).count
         (2, None)
-        >>> analyze(FiveBar(7, 8, 5, 8, 5), precision=0.1, resolve=True).count
+        >>> analyze(FiveBar(7, 8, 5, 8, 5), precision=0.1).count
         (2, 2)
         """
         hiding = any(flag.any() for flag in self._open_possible)

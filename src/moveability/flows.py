@@ -53,9 +53,13 @@ __all__ = [
     "face_neighbours",
     "flow_conditions",
     "flow_directions",
+    "slot_spans",
+    "supports_flows",
 ]
 
 Array = NDArray[np.float64]
+#: slack when comparing joint ranges of slots (as in :mod:`moveability.regions`)
+_SPAN_TOL = 1e-9
 
 
 class FaceNeighbours:
@@ -111,6 +115,15 @@ def face_neighbours(tree: HyperTree) -> FaceNeighbours:
         out.append(both[plus].astype(np.int64))
         out.append(both[minus].astype(np.int64))
     return FaceNeighbours(out, open_faces)
+
+
+def supports_flows(mechanism: Mechanism) -> bool:
+    """Whether the legs give the rates that flows need (``joint_gradient`` and
+    ``row_partials``); without them no node is attached and no count bounded
+    above."""
+    return all(
+        hasattr(leg, "joint_gradient") and hasattr(leg, "row_partials") for leg in mechanism.legs
+    )
 
 
 def flow_directions(k: int) -> tuple[NDArray[np.float64], list[list[int]]]:
@@ -173,8 +186,16 @@ class _Field:
         self.usable = usable
 
 
-def _fields(mechanism: Mechanism, lo: Array, hi: Array) -> list[_Field]:
-    """Constant directions, then turns about the legs' rotation centres (planar poses)."""
+def _fields(
+    mechanism: Mechanism,
+    lo: Array,
+    hi: Array,
+    angles: list[Interval] | None = None,
+    branches: NDArray[np.int64] | None = None,
+) -> list[_Field]:
+    """Constant directions, then turns about the legs' turn centres (planar poses;
+    ``angles`` are the joints' enclosures over the boxes and ``branches`` the
+    posture's, for centres that move with the joint)."""
     n, k = lo.shape
     vectors, faces = flow_directions(k)
     out = []
@@ -182,20 +203,35 @@ def _fields(mechanism: Mechanism, lo: Array, hi: Array) -> list[_Field]:
         mask = np.full(n, sum(1 << f for f in fl), dtype=np.uint8)
         velocity = [Interval(np.full(n, v)) for v in vector]
         out.append(_Field(velocity, mask, vector=vector))
-    if k != 2:
+    if k not in (2, 3):
         return out
     for i, leg in enumerate(mechanism.legs):
-        centre = getattr(leg, "rotation_center", None)
-        if centre is None:
+        if not hasattr(leg, "turn_centre") or len(leg.turn_centre(Interval(lo[:0, 0]))) != 2:
             continue
-        rel_x = Interval(lo[:, 0], hi[:, 0]) - float(centre[0])
-        rel_y = Interval(lo[:, 1], hi[:, 1]) - float(centre[1])
+        angle = angles[i] if angles is not None else Interval(np.zeros(n))
+        centre = leg.turn_centre(angle)
+        if hasattr(leg, "turn_arm") and branches is not None:
+            rel_x, rel_y = leg.turn_arm(lo, hi, int(branches[i]), angle)
+        else:
+            rel_x = Interval(lo[:, 0], hi[:, 0]) - centre[0]
+            rel_y = Interval(lo[:, 1], hi[:, 1]) - centre[1]
         # the orbit of a pose leaves a box that does not hold the centre
-        outside = ((centre[None, :] < lo) | (centre[None, :] > hi)).any(axis=1)
+        outside = (
+            (centre[0].hi < lo[:, 0])
+            | (centre[0].lo > hi[:, 0])
+            | (centre[1].hi < lo[:, 1])
+            | (centre[1].lo > hi[:, 1])
+        )
+        if k == 3:
+            # the platform (x, y, phi) turns about the point: phi turns with it, and
+            # leaves a box narrower than a turn
+            outside = (hi[:, 2] - lo[:, 2]) < np.pi
         for turn in (1.0, -1.0):
             velocity = [-rel_y * turn, rel_x * turn]
+            if k == 3:
+                velocity.append(Interval(np.full(n, turn)))
             mask = np.zeros(n, dtype=np.uint8)
-            for axis in range(2):
+            for axis in range(k):
                 mask |= np.where(velocity[axis].hi > 0, 1 << (2 * axis), 0).astype(np.uint8)
                 mask |= np.where(velocity[axis].lo < 0, 1 << (2 * axis + 1), 0).astype(np.uint8)
             out.append(_Field(velocity, mask, leg=i, turn=turn, usable=outside))
@@ -217,8 +253,10 @@ def flow_conditions(
     each limited joint's range they lie in (its *slots*, as in
     :func:`moveability.regions.region_graph`). The flows tried are the
     directions of :func:`flow_directions` and, for planar poses, the turns about
-    each leg's ``rotation_center`` (both senses): a turn keeps that leg's reach
-    and turns its joint at rate +-1, even where the leg folds.
+    each leg's ``turn_centre`` (both senses): a turn keeps that leg's reach and
+    moves its joint at the leg's ``turn_rate`` (the base of an RR leg: the leg
+    turns rigidly; the slider of a biglide leg: it stays), even where the leg
+    folds, on the branch where ``turn_keeps`` says so.
 
     Where every leg is regular, one more flow per slot and sign follows the
     constraints that may be active in the leaf: its direction is the sum of
@@ -270,7 +308,11 @@ def _posture_flows(
     split = split_legs(mechanism.limits)
     slots = 1 << len(split)
     blo, bhi = lo[rows], hi[rows]
-    fields = _fields(mechanism, blo, bhi)
+    branches = mechanism.postures[p]
+    angles = [
+        Interval(table.angles_lo[rows, p, i], table.angles_hi[rows, p, i]) for i in range(n_legs)
+    ]
+    fields = _fields(mechanism, blo, bhi, angles, branches)
     n_fixed = len(fields)
     n_flows = n_fixed + 2 * slots
     flows = np.zeros((2, rows.size, slots, n_flows), dtype=bool)
@@ -278,9 +320,7 @@ def _posture_flows(
     faces = np.zeros((n_flows, rows.size), dtype=np.uint8)
     for ff, field in enumerate(fields):
         faces[ff] = field.faces
-    if not rows.size or not all(
-        hasattr(leg, "joint_gradient") and hasattr(leg, "row_partials") for leg in mechanism.legs
-    ):
+    if not rows.size or not supports_flows(mechanism):
         return flows, exists, faces
     leg_status = table.leg_status[rows]
     regular = leg_status == REGULAR
@@ -295,10 +335,6 @@ def _posture_flows(
     def quiet() -> Any:
         return np.errstate(invalid="ignore", divide="ignore", over="ignore")
 
-    branches = mechanism.postures[p]
-    angles = [
-        Interval(table.angles_lo[rows, p, i], table.angles_hi[rows, p, i]) for i in range(n_legs)
-    ]
     with quiet():
         gradients = [
             leg.joint_gradient(blo, bhi, int(branches[i]), angles[i])  # type: ignore[attr-defined]
@@ -308,23 +344,28 @@ def _posture_flows(
     pieces = [mechanism.limits[i].pieces(angles[i]) for i in range(n_legs)]
     for c in range(slots):
         exists[:, c] = np.logical_and.reduce([pieces[i][0][combos[c][i]] for i in range(n_legs)])
+    fold_cache: list[dict[str, Any]] = [{} for _ in range(n_legs)]
     for ff, field in enumerate(fields):
         with quiet():
             ok = usable.copy() if field.usable is None else usable & field.usable
             rising, falling, rates = [], [], []
             for i, leg in enumerate(mechanism.legs):
                 if i == field.leg:
-                    # the whole leg turns: its reach stays, its joint turns with it
-                    up = np.full(rows.size, field.turn > 0)
-                    rates.append(Interval(np.full(rows.size, field.turn)))
-                    rising.append(up)
-                    falling.append(~up)
+                    # the leg keeps its reach; its joint moves at the leg's turn rate
+                    speed = field.turn * float(leg.turn_rate)  # type: ignore[attr-defined]
+                    rates.append(Interval(np.full(rows.size, speed)))
+                    rising.append(np.full(rows.size, speed >= 0))
+                    falling.append(np.full(rows.size, speed <= 0))
+                    if cross_serial:
+                        keeps = leg.turn_keeps(blo, bhi, int(branches[i]), field.turn)  # type: ignore[attr-defined]
+                        ok &= regular[:, i] | keeps
                     continue
                 rate = _dot(gradients[i], field.velocity)
                 if folding[:, i].any():
-                    if cross_serial and field.vector is not None and hasattr(leg, "fold_flow"):
+                    if cross_serial and hasattr(leg, "fold_flow"):
                         keeps, fold_rate = leg.fold_flow(
-                            blo, bhi, leg_status[:, i], int(branches[i]), field.vector
+                            blo, bhi, leg_status[:, i], int(branches[i]), field.velocity,
+                            cache=fold_cache[i],
                         )
                     else:
                         keeps = np.zeros(rows.size, dtype=bool)
@@ -448,82 +489,74 @@ def _adapted_flows(
 
 
 @njit(cache=True, nogil=True)
-def _attach_slots(
-    bits: NDArray[np.uint64], slot_done: NDArray[np.bool_], r: int, d: int
-) -> int:  # pragma: no cover - compiled
-    """Mark done the slots of row ``r`` that flow along ``d``; returns how many."""
-    count = 0
-    for c in range(bits.shape[1]):
-        if (bits[r, c] >> np.uint64(d)) & np.uint64(1) and not slot_done[r, c]:
-            slot_done[r, c] = True
-            count += 1
-    return count
-
-
-@njit(cache=True, nogil=True)
 def _propagate(
-    done: NDArray[np.bool_],
-    node_row: NDArray[np.int64],
-    row_leaf: NDArray[np.int64],
-    row_post: NDArray[np.int64],
-    bits: NDArray[np.uint64],
     slot_done: NDArray[np.bool_],
+    bits: NDArray[np.uint64],
     waiting: NDArray[np.int64],
     faces: NDArray[np.uint8],
-    back_ptr: NDArray[np.int64],
-    back_src: NDArray[np.int64],
-) -> NDArray[np.int64]:  # pragma: no cover - compiled
-    """Attach rows in order; returns the round of each row (-1: not attached)."""
-    n, _n_post = done.shape
-    m, n_slots = bits.shape
+    dep_ptr: NDArray[np.int64],
+    dep_row: NDArray[np.int64],
+    dep_slot: NDArray[np.int64],
+    dep_face: NDArray[np.int64],
+) -> None:  # pragma: no cover - compiled
+    """Attach slots (row, slot) until none more can be: a slot attaches along a flow
+    it has once no slot it may reach across that flow's exit faces is waiting."""
+    m, n_slots = slot_done.shape
     n_flows = faces.shape[0]
-    n_faces = back_ptr.size // (n + 1)
-    order = np.full(m, -1, dtype=np.int64)
-    left = np.zeros(m, dtype=np.int64)
-    for r in range(m):
-        for c in range(n_slots):
-            if not slot_done[r, c]:
-                left[r] += 1
-    queue = np.empty(m, dtype=np.int64)
+    queue = np.empty(m * n_slots, dtype=np.int64)
     tail = 0
     for r in range(m):
-        if done[row_leaf[r], row_post[r]]:
-            continue
-        for d in range(n_flows):
-            if waiting[d, r] == 0:
-                left[r] -= _attach_slots(bits, slot_done, r, d)
-        if left[r] == 0:
-            done[row_leaf[r], row_post[r]] = True
-            order[r] = 0
-            queue[tail] = r
-            tail += 1
+        for c in range(n_slots):
+            if slot_done[r, c]:
+                continue
+            for d in range(n_flows):
+                if waiting[d, r, c] == 0 and (bits[r, c] >> np.uint64(d)) & np.uint64(1):
+                    slot_done[r, c] = True
+                    queue[tail] = r * n_slots + c
+                    tail += 1
+                    break
     head = 0
     while head < tail:
-        r0 = queue[head]
+        sub = queue[head]
         head += 1
-        leaf = row_leaf[r0]
-        p = row_post[r0]
-        for f in range(n_faces):
+        for j in range(dep_ptr[sub], dep_ptr[sub + 1]):
+            r, c, f = dep_row[j], dep_slot[j], dep_face[j]
+            if slot_done[r, c]:
+                continue
             bit = np.uint8(1 << f)
-            for j in range(back_ptr[f * (n + 1) + leaf], back_ptr[f * (n + 1) + leaf + 1]):
-                src = back_src[j]
-                if done[src, p]:
+            for d in range(n_flows):
+                if (faces[d, r] & bit) == 0:
                     continue
-                r = node_row[src, p]
-                if r < 0:
-                    continue
-                for d in range(n_flows):
-                    if (faces[d, r] & bit) == 0:
-                        continue
-                    waiting[d, r] -= 1
-                    if waiting[d, r] == 0:
-                        left[r] -= _attach_slots(bits, slot_done, r, d)
-                if left[r] == 0:
-                    done[src, p] = True
-                    order[r] = order[r0] + 1
-                    queue[tail] = r
+                waiting[d, r, c] -= 1
+                if waiting[d, r, c] == 0 and (bits[r, c] >> np.uint64(d)) & np.uint64(1):
+                    slot_done[r, c] = True
+                    queue[tail] = r * n_slots + c
                     tail += 1
-    return order
+                    break
+
+
+def slot_spans(
+    table: SheetTable, nodes: NDArray[np.intp], limits: tuple[Any, ...]
+) -> NDArray[np.float64]:
+    """(m, slots, legs, 2): the range of values of each limited revolute joint in each
+    slot of the nodes (see :func:`moveability.regions.split_legs`)."""
+    from .regions import _pieces
+
+    split = split_legs(limits)
+    slots = 1 << len(split)
+    m = nodes.shape[0]
+    spans = np.zeros((m, slots, len(split), 2))
+    for j, i in enumerate(split):
+        lo, hi, _ = _pieces(
+            table.angles_lo[nodes[:, 0], nodes[:, 1], i],
+            table.angles_hi[nodes[:, 0], nodes[:, 1], i],
+            limits[i],
+        )
+        for c in range(slots):
+            k = (c >> j) & 1
+            spans[:, c, j, 0] = lo[k]
+            spans[:, c, j, 1] = hi[k]
+    return spans
 
 
 def attached_nodes(
@@ -533,6 +566,7 @@ def attached_nodes(
     exists: NDArray[np.bool_],
     faces: NDArray[np.uint8],
     neighbours: FaceNeighbours,
+    spans: NDArray[np.float64] | None = None,
 ) -> NDArray[np.bool_]:
     """The nodes (leaf, posture) attached for one sign.
 
@@ -542,64 +576,92 @@ def attached_nodes(
         Nodes that need no certificate: certified for the sign, or holding no
         valid configuration of it.
     nodes : (m, 2) int
-        The nodes whose flows are given, as (leaf, posture); every node that is
-        not done must be among them.
+        The nodes whose flows are given, as (leaf, posture); a node that is not
+        done and not among them is never attached (it blocks its neighbours).
     bits, exists, faces
         Their flows for the sign, slots and exit faces (see :func:`flow_conditions`).
     neighbours : FaceNeighbours
         The tree's face neighbours.
+    spans : (m, slots, legs, 2) float, optional
+        The joint ranges of the slots (:func:`slot_spans`). A configuration
+        leaving a slot across a face lands, in the node across, in a slot
+        whose ranges meet those of its own; without ``spans`` every slot
+        across is taken.
 
     Notes
     -----
-    Linear in the number of (node, flow, neighbour) triples: each node keeps
-    per flow the count of its neighbours not yet done, and its slots attach
-    when one count reaches zero.
+    A slot attaches along one of its flows once every slot across that flow's
+    exit faces that it may land in is done. Linear in the number of (slot,
+    flow, slot across) triples.
     """
     n, n_post = done.shape
     m = nodes.shape[0]
+    slots = exists.shape[1]
     n_faces = neighbours.open.shape[1]
     leaf, post = nodes[:, 0].astype(np.int64), nodes[:, 1].astype(np.int64)
     node_row = np.full((n, n_post), -1, dtype=np.int64)
     node_row[leaf, post] = np.arange(m)
-    per_face = np.zeros((n_faces, m), dtype=np.int64)
-    back_ptr = np.zeros(n_faces * (n + 1), dtype=np.int64)
-    back_src: list[NDArray[np.int64]] = []
-    offset = 0
+    slot_done = ~exists | done[leaf, post][:, None]
+    per_face = np.zeros((n_faces, m, slots), dtype=np.int64)
+    never = np.zeros((n_faces, m), dtype=bool)
+    dep_sub, dep_row, dep_slot, dep_face = [], [], [], []
     for f in range(n_faces):
         pairs = neighbours.pairs[f]
-        a, b = pairs[:, 0], pairs[:, 1]
-        for p in range(n_post):
-            at = np.flatnonzero(post == p)
-            if at.size:
-                count = np.bincount(a, weights=~done[b, p], minlength=n)
-                per_face[f, at] = count[leaf[at]].astype(np.int64)
+        a = np.repeat(pairs[:, 0].astype(np.int64), n_post)
+        b = np.repeat(pairs[:, 1].astype(np.int64), n_post)
+        p = np.tile(np.arange(n_post, dtype=np.int64), pairs.shape[0])
+        ra, rb = node_row[a, p], node_row[b, p]
+        live = (ra >= 0) & ~done[b, p]
+        # a node across that is neither done nor listed never attaches
+        never[f, ra[live & (rb < 0)]] = True
+        live &= rb >= 0
+        ra, rb = ra[live], rb[live]
+        # (pair, own slot, slot across): both waiting, and their joint ranges meet
+        meet = ~slot_done[ra][:, :, None] & ~slot_done[rb][:, None, :]
+        if spans is not None and spans.shape[2]:
+            sa, sb = spans[ra][:, :, None], spans[rb][:, None, :]
+            meet &= (
+                (sa[..., 0] <= sb[..., 1] + _SPAN_TOL) & (sb[..., 0] <= sa[..., 1] + _SPAN_TOL)
+            ).all(axis=3)
+        e, ca, cb = np.nonzero(meet)
+        per_face[f] += np.bincount(ra[e] * slots + ca, minlength=m * slots).reshape(m, slots)
+        dep_sub.append(rb[e] * slots + cb)
+        dep_row.append(ra[e])
+        dep_slot.append(ca.astype(np.int64))
+        dep_face.append(np.full(e.size, f, dtype=np.int64))
         # a face on the edge of the box can never be crossed
-        per_face[f][neighbours.open[leaf, f]] = np.iinfo(np.int64).max // 64
-        order = np.argsort(b, kind="stable")
-        counts = np.bincount(b, minlength=n)
-        back_ptr[f * (n + 1)] = offset
-        back_ptr[f * (n + 1) + 1 : (f + 1) * (n + 1)] = offset + np.cumsum(counts)
-        back_src.append(a[order])
-        offset += a.size
-    waiting = np.zeros((faces.shape[0], m), dtype=np.int64)
+        never[f] |= neighbours.open[leaf, f]
+    waiting = np.zeros((faces.shape[0], m, slots), dtype=np.int64)
     for d in range(faces.shape[0]):
+        stop = np.zeros(m, dtype=bool)
         for f in range(n_faces):
-            waiting[d] += np.where((faces[d] >> f) & 1 == 1, per_face[f], 0)
-    src = np.concatenate(back_src) if back_src else np.zeros(0, dtype=np.int64)
-    slot_done = ~exists | done[leaf, post][:, None]
-    state = done.copy()
+            crosses = (faces[d] >> f) & 1 == 1
+            waiting[d] += np.where(crosses[:, None], per_face[f], 0)
+            stop |= crosses & never[f]
+        # a flow that may cross such a face never attaches anything
+        waiting[d][stop] = np.iinfo(np.int64).max // 2
+    sub = np.concatenate(dep_sub) if dep_sub else np.zeros(0, dtype=np.int64)
+    order = np.argsort(sub, kind="stable")
+    dep_ptr = np.zeros(m * slots + 1, dtype=np.int64)
+    dep_ptr[1:] = np.cumsum(np.bincount(sub, minlength=m * slots))
+
+    def flat(parts: list[NDArray[np.int64]]) -> NDArray[np.int64]:
+        out = np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
+        return np.ascontiguousarray(out[order].astype(np.int64))
+
+    slot_done = np.ascontiguousarray(slot_done)
     _propagate(
-        state,
-        node_row,
-        leaf,
-        post,
+        slot_done,
         np.ascontiguousarray(bits),
-        np.ascontiguousarray(slot_done),
         waiting,
         np.ascontiguousarray(faces),
-        back_ptr,
-        src.astype(np.int64),
+        dep_ptr,
+        flat(dep_row),
+        flat(dep_slot),
+        flat(dep_face),
     )
+    state = done.copy()
+    state[leaf, post] |= slot_done.all(axis=1)
     return state & ~done
 
 

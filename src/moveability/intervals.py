@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
@@ -73,6 +74,39 @@ def _down_sum(x: Array) -> Array:
 def _up_sum(x: Array) -> Array:
     """A rounded sum or difference widened up; a zero result is exact."""
     return np.where(x == 0, x, _up(x))
+
+
+@njit(cache=True, nogil=True)
+def _product_bounds(
+    a_lo: Array, a_hi: Array, b_lo: Array, b_hi: Array
+) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    """Bounds of ``[a_lo, a_hi] * [b_lo, b_hi]``, widened outward by one ulp.
+
+    The four bound products give the range; ``0 * inf`` (nan) is taken as 0, the
+    product of a zero bound. A zero bound is exact, and kept, unless a zero
+    product comes from two non-zero factors (an underflow)."""
+    n = a_lo.size
+    out_lo = np.empty(n)
+    out_hi = np.empty(n)
+    for i in range(n):
+        low = np.inf
+        high = -np.inf
+        underflow = False
+        for j in range(4):
+            x = a_lo[i] if j < 2 else a_hi[i]
+            y = b_lo[i] if j % 2 == 0 else b_hi[i]
+            p = x * y
+            if p != p:
+                p = 0.0
+            if p < low:
+                low = p
+            if p > high:
+                high = p
+            if p == 0.0 and x != 0.0 and y != 0.0:
+                underflow = True
+        out_lo[i] = 0.0 if (low == 0.0 and not underflow) else np.nextafter(low, -np.inf)
+        out_hi[i] = 0.0 if (high == 0.0 and not underflow) else np.nextafter(high, np.inf)
+    return out_lo, out_hi
 
 
 @dataclass(frozen=True)
@@ -150,19 +184,14 @@ class Interval:
     def __mul__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
         s_lo, s_hi, o_lo, o_hi = np.broadcast_arrays(self.lo, self.hi, o.lo, o.hi)
-        a = np.stack([s_lo, s_lo, s_hi, s_hi])
-        b = np.stack([o_lo, o_hi, o_lo, o_hi])
-        with np.errstate(invalid="ignore", over="ignore"):
-            products = a * b
-        # 0 * inf is nan: the product of a zero bound is zero
-        products = np.where(np.isnan(products), 0.0, products)
-        low, high = products.min(axis=0), products.max(axis=0)
-        # a product with a zero factor is exact: a zero bound needs no widening unless
-        # some zero product is an underflow (non-zero factors)
-        exact = ~((products == 0) & (a != 0) & (b != 0)).any(axis=0)
-        lo = np.where((low == 0) & exact, 0.0, _down(low))
-        hi = np.where((high == 0) & exact, 0.0, _up(high))
-        return Interval(lo, hi)
+        shape = s_lo.shape
+        lo, hi = _product_bounds(
+            np.ascontiguousarray(s_lo).ravel(),
+            np.ascontiguousarray(s_hi).ravel(),
+            np.ascontiguousarray(o_lo).ravel(),
+            np.ascontiguousarray(o_hi).ravel(),
+        )
+        return Interval(lo.reshape(shape), hi.reshape(shape))
 
     __rmul__ = __mul__
 

@@ -83,7 +83,10 @@ def _outline(ax: Axes, result: Analysis, value: float) -> Any:
     from .measurement import locate
 
     tree = result.tree
-    n = [2 << d for d in tree.max_depth[:2]]
+    # the leaves' finest depth on each axis (the tree may allow deeper ones), at
+    # most 2048 points a side
+    finest = tree.layout.axis_depths(tree.levels).max(axis=0, initial=0)
+    n = [min(2 << int(d), 2048) for d in finest[:2]]
     xs = tree.lo[0] + (np.arange(n[0]) + 0.5) * (tree.hi[0] - tree.lo[0]) / n[0]
     ys = tree.lo[1] + (np.arange(n[1]) + 0.5) * (tree.hi[1] - tree.lo[1]) / n[1]
     gx, gy = np.meshgrid(xs, ys)

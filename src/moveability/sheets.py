@@ -156,7 +156,11 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         lim_out = np.zeros(n, dtype=bool)
         for i, b in enumerate(postures[p]):
             r = reaches[i]
+            # a branch's own enclosure where the leg is regular, or folds and the leg
+            # encloses each branch there too; else the hull of both
             regular = leg_status[:, i] == REGULAR
+            if getattr(legs[i], "branches_at_folds", False):
+                regular = regular | (folding[:, i] & (leg_status[:, i] != REACH_UNKNOWN))
             a = Interval(
                 np.where(regular, r.branches[b].lo, r.hull.lo),
                 np.where(regular, r.branches[b].hi, r.hull.hi),

@@ -37,6 +37,7 @@ def format_export(data: Mapping[str, Any]) -> str:
 )
 @options.precision_option
 @options.json_options
+@options.resolve_option
 def export_command(
     spec: str, out: str, precision: float, json_out: str | None, overwrite: bool
 ) -> None:

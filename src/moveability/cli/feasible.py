@@ -40,6 +40,7 @@ def format_feasible(data: Mapping[str, Any]) -> str:
 @options.precision_option
 @options.json_options
 @options.aspects_option
+@options.resolve_option
 def feasible_command(
     spec: str,
     points: str,

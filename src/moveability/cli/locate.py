@@ -48,6 +48,7 @@ def format_locate(data: Mapping[str, Any]) -> str:
 @options.precision_option
 @options.json_options
 @options.aspects_option
+@options.resolve_option
 def locate_command(
     spec: str,
     points: str,

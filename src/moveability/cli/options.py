@@ -38,9 +38,11 @@ __all__ = [
     "progress_reporter",
     "read_points",
     "reporting_errors",
+    "resolve_option",
     "run_analysis",
     "spec_argument",
     "three_valued",
+    "wants_resolution",
     "write_output",
 ]
 
@@ -241,10 +243,42 @@ def make_mechanism(spec: Mapping[str, Any]) -> Any:
 def run_analysis(
     mechanism: Any, precision: float, progress: Callable[..., None] | None, **options: Any
 ) -> Any:
-    """The analysis of ``mechanism`` (``moveability.analysis.analyze``)."""
+    """The analysis of ``mechanism`` (``moveability.analysis.analyze``), refined
+    below the precision where the count is open unless the command was given
+    ``--no-resolve`` (see :func:`resolve_option`)."""
     from ..analysis import analyze
 
+    options.setdefault("resolve", wants_resolution())
     return analyze(mechanism, precision=precision, progress=progress, **options)
+
+
+_RESOLVE = "moveability.resolve"
+
+
+def wants_resolution() -> bool:
+    """Whether the running command resolves the open answers (True outside a command)."""
+    context = click.get_current_context(silent=True)
+    return True if context is None else bool(context.meta.get(_RESOLVE, True))
+
+
+def resolve_option(command: F) -> F:
+    """``--resolve/--no-resolve``: refine below the precision where the count is open."""
+
+    def remember(context: click.Context, _param: click.Parameter, value: bool) -> bool:
+        context.meta[_RESOLVE] = value
+        return value
+
+    return click.option(
+        "--resolve/--no-resolve",
+        default=True,
+        show_default=True,
+        expose_value=False,
+        is_eager=True,
+        callback=remember,
+        help="Refine, below the precision, only the cells that keep the count of "
+        "regions or N-connectivity open (within a deterministic budget); "
+        "--no-resolve keeps the plain pass at the precision.",
+    )(command)
 
 
 def aspects_option(command: F) -> F:

@@ -51,6 +51,7 @@ def format_plan(data: Mapping[str, Any]) -> str:
 @options.points_argument
 @options.precision_option
 @options.json_options
+@options.resolve_option
 def plan_command(
     spec: str, points: str, precision: float, json_out: str | None, overwrite: bool
 ) -> None:

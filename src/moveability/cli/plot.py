@@ -76,6 +76,7 @@ def _check_figure(name: str, mechanism: object) -> None:
 @click.option("--animate", is_flag=True, help="With --figure path: write an animated GIF.")
 @click.option("--overwrite", is_flag=True, help="Replace --out if it exists.")
 @options.precision_option
+@options.resolve_option
 def plot_command(
     spec: str,
     name: str,

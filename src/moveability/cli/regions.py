@@ -92,21 +92,13 @@ def _count(data: Mapping[str, Any]) -> str:
 @options.precision_option
 @options.json_options
 @options.aspects_option
-@click.option(
-    "--resolve/--no-resolve",
-    "resolve",
-    default=False,
-    show_default=True,
-    help="Refine, below the precision, the cells that keep the count of regions open "
-    "(within a deterministic budget); --no-resolve keeps the plain pass.",
-)
+@options.resolve_option
 def regions_command(
     spec: str,
     precision: float,
     json_out: str | None,
     overwrite: bool,
     generalized_aspects: bool,
-    resolve: bool,
 ) -> None:
     """The N-connected regions of the workspace of the manipulator of SPEC.
 
@@ -122,7 +114,6 @@ def regions_command(
             precision,
             options.progress_reporter(),
             **options.analysis_options(generalized_aspects),
-            **({"resolve": True} if resolve else {}),
         )
         data = result.to_dict()
     options.write_output(data, json_out, overwrite, format_regions)

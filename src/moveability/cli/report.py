@@ -19,6 +19,7 @@ __all__ = ["report_command"]
     help="Directory to write index.html into.",
 )
 @options.precision_option
+@options.resolve_option
 def report_command(spec: str, out: str, precision: float) -> None:
     """Write OUT/index.html: the spec, the summary table and every figure.
 

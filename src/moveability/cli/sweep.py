@@ -103,6 +103,7 @@ def _check_jobs(jobs: int | None, scheduler: str | None) -> int:
     default=None,
     help="Also draw the map of the number of regions over the two names that vary.",
 )
+@options.resolve_option
 def sweep_command(
     spec: str,
     vary: tuple[str, ...],
@@ -151,6 +152,7 @@ def sweep_command(
             scheduler=scheduler,
             retry_errors=retry_errors,
             progress=sweep_progress(),
+            resolve=options.wants_resolution(),
         )
         if figure_out is not None:
             from ..sweep import plot_sweep_map

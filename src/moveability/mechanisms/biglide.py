@@ -53,6 +53,8 @@ class SliderLeg:
     joint: str
 
     n_branches = 2
+    #: :meth:`reach` encloses each branch where the leg may fold too (``x +- [0, h]``)
+    branches_at_folds = True
 
     def angles(self, points: Array, clip: bool = False) -> Array:
         """Slider positions of both branches, shape (m, 2); NaN where unreachable.
@@ -111,19 +113,26 @@ class SliderLeg:
         return [iv.as_interval(np.ones(n)), y / self.offset(lo, hi, branch)]
 
     def fold_flow(
-        self, lo: Array, hi: Array, status: NDArray[np.uint8], branch: int, direction: Array
+        self,
+        lo: Array,
+        hi: Array,
+        status: NDArray[np.uint8],
+        branch: int,
+        velocity: list[Interval],
+        cache: dict[str, object] | None = None,
     ) -> tuple[NDArray[np.bool_], Interval]:
         """Over boxes where the leg may stand perpendicular to the rail: whether moving
-        along ``direction`` keeps a pose reachable (``|y|`` never grows), and an
-        enclosure of the slider's rate on ``branch``, ``x +- sqrt(L^2 - y^2)``.
+        at ``velocity`` (one enclosure per pose axis) keeps a pose reachable (``|y|``
+        never grows), and an enclosure of the slider's rate on ``branch``,
+        ``x +- sqrt(L^2 - y^2)``.
 
         The rate is ``d_x -+ (y / h) d_y`` with ``h = sqrt(L^2 - y^2)`` in
         ``[0, h_max]`` over the reachable part: ``y / h`` is unbounded but at least
         ``y_min / h_max`` in size, with the sign of ``y``.
         """
-        d = np.asarray(direction, dtype=np.float64)
+        dx, dy = velocity
         y = Interval(lo[:, 1], hi[:, 1])
-        keeps = (status == FOLD_OUTER) & ((y * d[1]).hi <= 0)
+        keeps = (status == FOLD_OUTER) & ((y * dy).hi <= 0)
         h_max = self.offset(lo, hi, 1).hi
         usable = h_max > 0
         pos, neg = (lo[:, 1] > 0) & usable, (hi[:, 1] < 0) & usable
@@ -132,12 +141,32 @@ class SliderLeg:
                 np.where(pos, np.nextafter(lo[:, 1] / h_max, -np.inf), -np.inf),
                 np.where(neg, np.nextafter(hi[:, 1] / h_max, np.inf), np.inf),
             )
-        sign = 1.0 if branch == 0 else -1.0
-        if d[1] == 0:
-            rate = Interval(np.full(lo.shape[0], d[0]))
-        else:
-            rate = ratio * (-sign * d[1]) + d[0]
-        return keeps, rate
+            sign = 1.0 if branch == 0 else -1.0
+            rate = ratio * (-sign * dy) + dx
+        still = (dy.lo == 0) & (dy.hi == 0)
+        return keeps, Interval(np.where(still, dx.lo, rate.lo), np.where(still, dx.hi, rate.hi))
+
+    #: the slider's rate along a turn about :meth:`turn_centre`: it stays
+    turn_rate = 0.0
+
+    def turn_centre(self, angles: Interval) -> list[Interval]:
+        """The point a pose may turn about with the slider still: the slider
+        ``(rho, 0)``; the leg keeps its length."""
+        return [angles, iv.as_interval(np.zeros(angles.lo.shape[0]))]
+
+    def turn_arm(self, lo: Array, hi: Array, branch: int, angles: Interval) -> list[Interval]:
+        """The pose less the turn centre on a branch over boxes: ``(x - rho, y)`` with
+        ``x - rho = -+sqrt(L^2 - y^2)`` enclosed free of x."""
+        return [self.offset(lo, hi, branch), Interval(lo[:, 1], hi[:, 1])]
+
+    def turn_keeps(self, lo: Array, hi: Array, branch: int, turn: float) -> NDArray[np.bool_]:
+        """Whether a turn (sense ``turn``) about the slider keeps the branch over the
+        boxes: it does where it moves the pose away from the rail's normal through
+        the slider (``|y|`` never grows), the branch's side of it."""
+        toward = 1.0 if branch == 0 else -1.0
+        return np.asarray(
+            (lo[:, 1] * turn * toward >= 0) & (hi[:, 1] * turn * toward >= 0), dtype=bool
+        )
 
     def reach(self, lo: Array, hi: Array) -> LegReach:
         """REGULAR where ``|y| < L`` on the whole box, REACH_OUT where ``|y| > L``;

@@ -12,6 +12,7 @@ stretched) and ``rho = |a - b|`` (the leg folded).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -128,35 +129,64 @@ class RRLeg:
         den = (u[0] * iv.sin(angles) - u[1] * iv.cos(angles)) * self.proximal
         return [-(u[0] / den), -(u[1] / den)]
 
-    @property
-    def rotation_center(self) -> Array:
-        """Turning a pose about the base turns the whole leg: its reach and its
-        elbow stay, and its joint turns at the same rate."""
-        return np.asarray(self.base, dtype=np.float64)
+    #: the joint's rate along a unit turn about :meth:`turn_centre`
+    turn_rate = 1.0
+
+    def turn_centre(self, angles: Interval) -> list[Interval]:
+        """The point a pose may turn about with the leg rigid: the base. The
+        leg's reach and elbow stay, and its joint turns at the same rate."""
+        n = angles.lo.shape[0]
+        return [iv.as_interval(np.full(n, float(c))) for c in self.base]
+
+    def turn_keeps(self, lo: Array, hi: Array, branch: int, turn: float) -> NDArray[np.bool_]:
+        """Whether a turn about :meth:`turn_centre` keeps the branch: always (the
+        leg turns rigidly)."""
+        return np.ones(lo.shape[0], dtype=bool)
 
     def fold_flow(
-        self, lo: Array, hi: Array, status: NDArray[np.uint8], branch: int, direction: Array
+        self,
+        lo: Array,
+        hi: Array,
+        status: NDArray[np.uint8],
+        branch: int,
+        velocity: list[Interval],
+        cache: dict[str, Any] | None = None,
     ) -> tuple[NDArray[np.bool_], Interval]:
         """Over boxes where the leg may fold (``status`` FOLD_OUTER or FOLD_INNER): whether
-        moving a pose along ``direction`` (k,) keeps it reachable, and an enclosure
-        of the rate of the joint of ``branch``.
+        moving a pose at ``velocity`` (one enclosure per pose axis) keeps it
+        reachable, and an enclosure of the rate of the joint of ``branch``.
 
         The joint is ``t = theta + s alpha(rho)`` (``s = +1`` on branch 0, ``-1`` on
         branch 1), with ``theta`` the direction and ``rho`` the distance of the
         pose from the base; ``cos alpha = g(rho) = rho / 2a + (a^2 - b^2) / (2 a rho)``.
         The rate ``d theta + s alpha'(rho) d rho`` is unbounded at the fold, where
         ``alpha' = -g' / sin alpha`` and ``sin alpha`` falls to 0: its enclosure
-        keeps the lower bound ``1 / max sin alpha`` of ``1 / sin alpha``.
+        keeps the lower bound ``1 / max sin alpha`` of ``1 / sin alpha``. ``cache``
+        (one per boxes and branch) keeps what does not depend on the velocity.
         """
-        base = np.asarray(self.base)
-        d = np.asarray(direction, dtype=np.float64)
-        dx = Interval(lo[:, 0], hi[:, 0]) - base[0]
-        dy = Interval(lo[:, 1], hi[:, 1]) - base[1]
+        terms = None if cache is None else cache.get("fold")
+        if terms is None:
+            terms = self._fold_terms(lo, hi, branch)
+            if cache is not None:
+                cache["fold"] = terms
+        dx, dy, rho, rho2, alpha_scale, sign = terms
+        d = velocity
         radial = dx * d[0] + dy * d[1]  # rho times d rho
         turning = dx * d[1] - dy * d[0]  # rho^2 times d theta
         outer = status == FOLD_OUTER
         inner = status == FOLD_INNER
         keeps = (outer & (radial.hi <= 0)) | (inner & (radial.lo >= 0))
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            alpha_rate = -alpha_scale * (radial / rho)
+            theta_rate = turning / rho2
+            rate = theta_rate + alpha_rate * sign
+        return keeps, rate
+
+    def _fold_terms(self, lo: Array, hi: Array, branch: int) -> tuple[Any, ...]:
+        """What :meth:`fold_flow` needs of the boxes alone, for every velocity."""
+        base = np.asarray(self.base)
+        dx = Interval(lo[:, 0], hi[:, 0]) - base[0]
+        dy = Interval(lo[:, 1], hi[:, 1]) - base[1]
         a, b = self.proximal, self.distal
         k = (iv.as_interval(a) * a - iv.as_interval(b) * b) / (2.0 * a)
         rho2 = iv.square(dx) + iv.square(dy)
@@ -177,11 +207,8 @@ class RRLeg:
                 np.where(sin_max > 0, np.nextafter(1.0 / np.maximum(sin_max, 1e-300), 0.0), 0.0),
                 np.full(lo.shape[0], np.inf),
             )
-            alpha_rate = -(slope * inverse) * (radial / rho)
-            theta_rate = turning / rho2
-            sign = 1.0 if branch == 0 else -1.0
-            rate = theta_rate + alpha_rate * sign
-        return keeps, rate
+            alpha_scale = slope * inverse
+        return dx, dy, rho, rho2, alpha_scale, 1.0 if branch == 0 else -1.0
 
     def serial_term(self, points: Array, angles: Array) -> Array:
         """The leg's term of B, ``-(P - C) x (C - base)``: zero at a serial singularity."""

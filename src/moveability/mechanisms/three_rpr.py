@@ -140,6 +140,19 @@ class RPRLeg:
         """``drho/dX = row / rho`` (``angles`` encloses rho)."""
         return [r / angles for r in self.a_row_boxes(lo, hi, angles)]
 
+    #: the length's rate along a turn about :meth:`turn_centre`: it stays
+    turn_rate = 0.0
+
+    def turn_centre(self, angles: Interval) -> list[Interval]:
+        """The point the platform may turn about with the length still: the base
+        joint (the pose's x, y turn about it and phi turns at the same rate)."""
+        n = angles.lo.shape[0]
+        return [iv.as_interval(np.full(n, float(c))) for c in self.base]
+
+    def turn_keeps(self, lo: Array, hi: Array, branch: int, turn: float) -> NDArray[np.bool_]:
+        """A turn about the base keeps the (only) branch."""
+        return np.ones(lo.shape[0], dtype=bool)
+
     def reach(self, lo: Array, hi: Array) -> LegReach:
         """Every pose is reachable; REGULAR where the length certainly does not vanish."""
         dx, dy, _, _ = self._target_boxes(lo, hi)

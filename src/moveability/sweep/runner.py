@@ -146,6 +146,7 @@ def design_row(
     values: Sequence[float],
     precision: float,
     analyze: Callable[..., Any] | None = None,
+    resolve: bool = True,
 ) -> Row:
     """Analyse one design and return its row; a failure is recorded, not raised.
 
@@ -158,8 +159,10 @@ def design_row(
     precision : float
         Precision of the analysis.
     analyze : callable, optional
-        The analysis; by default ``moveability.analyze`` with ``resolve=True``
-        (the cells that keep the count open are refined below the precision).
+        The analysis; by default ``moveability.analyze``.
+    resolve : bool, default True
+        Refine, below the precision, the cells that keep the count open (see
+        :func:`moveability.analyze`); False keeps the plain pass.
 
     Examples
     --------
@@ -176,8 +179,7 @@ def design_row(
     if analyze is None:
         from ..analysis import analyze as analysis
 
-        # a sweep asks for counts: refine where they are open
-        run: Callable[..., Any] = functools.partial(analysis, resolve=True)
+        run: Callable[..., Any] = functools.partial(analysis, resolve=resolve)
     else:
         run = analyze
     start = time.perf_counter()
@@ -197,11 +199,12 @@ def run_chunk(
     chunk: Sequence[Sequence[float]],
     precision: float,
     malloc_fix: bool = True,
+    resolve: bool = True,
 ) -> list[Row]:
     """The rows of several designs, run one after the other (the task sent to a worker)."""
     if malloc_fix:
         restore_malloc_thresholds()
-    return [design_row(spec, names, values, precision) for values in chunk]
+    return [design_row(spec, names, values, precision, resolve=resolve) for values in chunk]
 
 
 # ----------------------------------------------------------------- many designs
@@ -228,6 +231,7 @@ def run_designs(
     scheduler: str | None = None,
     chunk_size: int | None = None,
     malloc_fix: bool = True,
+    resolve: bool = True,
 ) -> Iterator[list[Row]]:
     """Analyse designs and yield their rows as they finish (in any order).
 
@@ -251,6 +255,8 @@ def run_designs(
     malloc_fix : bool, default True
         Call :func:`restore_malloc_thresholds` in each process before its first
         design (turned off only to measure what it saves).
+    resolve : bool, default True
+        Refine where the counts are open (see :func:`design_row`).
 
     Yields
     ------
@@ -274,16 +280,19 @@ def run_designs(
     if not designs:
         return
     if scheduler is not None:
-        yield from _run_dask(spec, names, designs, precision, scheduler, chunk_size, malloc_fix)
+        yield from _run_dask(
+            spec, names, designs, precision, scheduler, chunk_size, malloc_fix, resolve
+        )
     elif jobs == 1:
         for values in designs:
-            yield run_chunk(spec, names, [values], precision, malloc_fix)
+            yield run_chunk(spec, names, [values], precision, malloc_fix, resolve)
     else:
         from joblib import Parallel, delayed
 
         parallel = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")
         yield from parallel(
-            delayed(run_chunk)(spec, names, [values], precision, malloc_fix) for values in designs
+            delayed(run_chunk)(spec, names, [values], precision, malloc_fix, resolve)
+            for values in designs
         )
 
 
@@ -301,6 +310,7 @@ def _run_dask(
     address: str,
     chunk_size: int | None,
     malloc_fix: bool,
+    resolve: bool = True,
 ) -> Iterator[list[Row]]:
     from distributed import Client, as_completed
 
@@ -319,7 +329,14 @@ def _run_dask(
         chunks = _chunks(designs, chunk_size)
         futures = {
             client.submit(
-                run_chunk, dict(spec), list(names), chunk, precision, malloc_fix, pure=False
+                run_chunk,
+                dict(spec),
+                list(names),
+                chunk,
+                precision,
+                malloc_fix,
+                resolve,
+                pure=False,
             ): chunk
             for chunk in chunks
         }
@@ -375,6 +392,7 @@ def run_sweep(
     retry_errors: bool = False,
     progress: Callable[[int, int], object] | None = None,
     malloc_fix: bool = True,
+    resolve: bool = True,
 ) -> dict[str, int]:
     """Analyse the product of the ranges and write one row per design to ``out``.
 
@@ -400,6 +418,9 @@ def run_sweep(
         Called as ``progress(done, total)`` at the start and after each result.
     malloc_fix : bool, default True
         See :func:`run_designs`.
+    resolve : bool, default True
+        Refine, below the precision, where a design's count is open (see
+        :func:`moveability.analyze`); False keeps the plain pass.
 
     Returns
     -------
@@ -451,6 +472,7 @@ def run_sweep(
             jobs=jobs,
             scheduler=scheduler,
             malloc_fix=malloc_fix,
+            resolve=resolve,
         ):
             table.extend(rows)
             computed += len(rows)
