@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from moveability import intervals as iv
@@ -163,6 +163,7 @@ def test_prismatic_leg_with_one_root_in_its_stroke():
     st.floats(0.001, 1.0),
     st.floats(0.001, 1.0),
 )
+@example(0.0, 1.1125369292536007e-308, 1.0, 1.0)  # a corner next to the base
 def test_reach_property(cx, cy, wx, wy):
     leg, ref = five_bar_leg(), RRLeg((0.0, 0.0), A, B, "t1")
     lo, hi = np.array([[cx, cy]]), np.array([[cx + wx, cy + wy]])

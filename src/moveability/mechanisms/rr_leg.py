@@ -92,7 +92,8 @@ class RRLeg:
         d = p - np.asarray(self.base)
         rho = np.hypot(d[:, 0], d[:, 1])
         a, b = self.proximal, self.distal
-        with np.errstate(divide="ignore", invalid="ignore"):
+        # with unequal links a pose next to the base overflows g: out of reach (NaN)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             g = (rho**2 + a * a - b * b) / (2 * a * rho)
         ok = np.abs(g) <= (1.0 + 1e-12 if clip else 1.0)
         alpha = np.where(ok, np.arccos(np.clip(g, -1.0, 1.0)), np.nan)
