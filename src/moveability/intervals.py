@@ -183,14 +183,13 @@ class Interval:
 
     def __mul__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
-        s_lo, s_hi, o_lo, o_hi = np.broadcast_arrays(self.lo, self.hi, o.lo, o.hi)
-        shape = s_lo.shape
-        lo, hi = _product_bounds(
-            np.ascontiguousarray(s_lo).ravel(),
-            np.ascontiguousarray(s_hi).ravel(),
-            np.ascontiguousarray(o_lo).ravel(),
-            np.ascontiguousarray(o_hi).ravel(),
-        )
+        shape = np.broadcast_shapes(self.lo.shape, self.hi.shape, o.lo.shape, o.hi.shape)
+
+        def flat(x: Array) -> Array:
+            # read-only views or copies: the kernel only reads them
+            return np.ascontiguousarray(np.broadcast_to(x, shape)).reshape(-1)
+
+        lo, hi = _product_bounds(flat(self.lo), flat(self.hi), flat(o.lo), flat(o.hi))
         return Interval(lo.reshape(shape), hi.reshape(shape))
 
     __rmul__ = __mul__
