@@ -242,11 +242,12 @@ def resolve_analysis(
 ) -> Analysis:
     """Refine, below the precision, the leaves that keep the count of regions open.
 
-    Each round splits once the leaves of :meth:`Analysis.open_leaves` that are
-    above the tree's maximal level, classifies only their children and builds
-    the analysis again, until nothing is open, the leaves reach the maximal
-    level, or the tree would hold more than ``max_leaves`` leaves. The cost
-    follows the open part, not the box.
+    Each round splits the leaves of :meth:`Analysis.open_leaves` that are above
+    the tree's maximal level (twice those where a region may hide), classifies
+    only the new leaves and builds the analysis again, until nothing is open,
+    the leaves reach the maximal level, or the tree would hold more than
+    ``max_leaves`` leaves. The leaves split follow the open part; each round
+    still rebuilds the graphs of the whole tree.
     """
     mechanism = result.mechanism
     while True:
@@ -604,6 +605,7 @@ class Analysis:
         self._region_nodes: list[tuple[int, int, int]] = []  # (certain id, row, possible id)
         #: leaves that keep some W_Nj = W open
         self._w_open = np.zeros(len(self.areas), dtype=bool)
+        self._spanning = self._spanning_nodes()
         for rid, (_, c, code) in enumerate(regions):
             row, u = divmod(code, 1 << 40)
             in_c = g.certain == c
@@ -634,6 +636,22 @@ class Analysis:
             self._region_nodes.append((c, row, u))
         del n_post
 
+    def _spanning_nodes(self) -> NDArray[np.bool_]:
+        """(n, P): nodes whose posture has a valid configuration at every pose of W
+        over the leaf: every leg reaches the leaf, and every configuration is
+        within the limits (a range of a whole turn holds every angle; its stop
+        only cuts the sheet in two pieces)."""
+        t = self.table
+        legs = t.leg_status
+        reached = ~((legs == REACH_UNKNOWN) | (legs == REACH_OUT)).any(axis=1)
+        valid = np.repeat(reached[:, None], t.status.shape[1], axis=1)
+        for i, limit in enumerate(self.mechanism.limits):
+            if limit.periodic or (not limit.prismatic and limit.hi - limit.lo >= 2 * np.pi):
+                continue
+            angles = Interval(t.angles_lo[:, :, i].ravel(), t.angles_hi[:, :, i].ravel())
+            valid &= (limit.classify(angles) == INSIDE).reshape(valid.shape)
+        return valid
+
     def _held_by(self, c: int, row: int, leaves: NDArray[np.bool_]) -> NDArray[np.bool_]:
         """Of ``leaves``, those where every pose of W (but a set of measure zero)
         has a configuration in the region of certified part ``c`` (sign row ``row``).
@@ -662,17 +680,7 @@ class Analysis:
             done, nodes, bits[row], exists, faces, self._neighbours, self._spans
         )
         ok = (done | attached) & ~t.may_hold(-s) & ~(t.singular & (t.status != OUT))
-        legs = t.leg_status
-        reached = ~((legs == REACH_UNKNOWN) | (legs == REACH_OUT)).any(axis=1)
-        # every configuration of the posture within the limits: a range of a whole
-        # turn holds every angle (its stop only cuts the sheet in two pieces)
-        valid = np.ones(t.status.shape, dtype=bool)
-        for i, limit in enumerate(self.mechanism.limits):
-            if limit.periodic or (not limit.prismatic and limit.hi - limit.lo >= 2 * np.pi):
-                continue
-            angles = Interval(t.angles_lo[:, :, i].ravel(), t.angles_hi[:, :, i].ravel())
-            valid &= (limit.classify(angles) == INSIDE).reshape(valid.shape)
-        spans = (in_c | attached) & valid & (t.sign == s) & reached[:, None]
+        spans = (in_c | attached) & self._spanning & (t.sign == s)
         return np.asarray(leaves & (ok.all(axis=1) | spans.any(axis=1)), dtype=bool)
 
     @property

@@ -157,6 +157,16 @@ def flow_directions(k: int) -> tuple[NDArray[np.float64], list[list[int]]]:
     return np.array(vectors), faces
 
 
+def _exit_faces(low: list[Array], high: list[Array]) -> NDArray[np.uint8]:
+    """Faces a flow may leave a box through, from bounds of its velocity on each
+    axis: bit ``2 k`` where it may rise along axis k, ``2 k + 1`` where it may fall."""
+    mask = np.zeros(np.shape(low[0]), dtype=np.uint8)
+    for axis, (lo, hi) in enumerate(zip(low, high, strict=True)):
+        mask |= np.where(hi > 0, 1 << (2 * axis), 0).astype(np.uint8)
+        mask |= np.where(lo < 0, 1 << (2 * axis + 1), 0).astype(np.uint8)
+    return mask
+
+
 def _dot(values: list[Interval], velocity: list[Interval]) -> Interval:
     """``sum_k values[k] * velocity[k]``."""
     total = values[0] * velocity[0]
@@ -230,10 +240,7 @@ def _fields(
             velocity = [-rel_y * turn, rel_x * turn]
             if k == 3:
                 velocity.append(Interval(np.full(n, turn)))
-            mask = np.zeros(n, dtype=np.uint8)
-            for axis in range(k):
-                mask |= np.where(velocity[axis].hi > 0, 1 << (2 * axis), 0).astype(np.uint8)
-                mask |= np.where(velocity[axis].lo < 0, 1 << (2 * axis + 1), 0).astype(np.uint8)
+            mask = _exit_faces([v.lo for v in velocity], [v.hi for v in velocity])
             out.append(_Field(velocity, mask, leg=i, turn=turn, usable=outside))
     return out
 
@@ -481,11 +488,8 @@ def _adapted_flows(
                 steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
             index = first + 2 * c + row
             flows[row, :, c, index] = ok & steady
-            mask = np.zeros(n, dtype=np.uint8)
-            for axis in range(k):
-                mask |= np.where(direction[:, axis] > 0, 1 << (2 * axis), 0).astype(np.uint8)
-                mask |= np.where(direction[:, axis] < 0, 1 << (2 * axis + 1), 0).astype(np.uint8)
-            faces[index] = mask
+            columns = [direction[:, axis] for axis in range(k)]
+            faces[index] = _exit_faces(columns, columns)
 
 
 @njit(cache=True, nogil=True)

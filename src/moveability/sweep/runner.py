@@ -112,7 +112,7 @@ def summarize(result: Any) -> Row:
     --------
     >>> from moveability import analyze, load_spec
     >>> spec = load_spec("examples/five-bar-paper.toml")
-    >>> row = summarize(analyze(spec, precision=0.1, resolve=True))
+    >>> row = summarize(analyze(spec, precision=0.1))
     >>> row["regions"], row["n_connected"], round(row["largest_share"], 3)
     (2, False, 0.94)
     """
