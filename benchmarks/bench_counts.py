@@ -2,12 +2,14 @@
 
 Prints, for random five-bars (seeded) at one precision, the time per design
 with and without the resolution below the precision, and the share of designs
-whose count and N-connectivity are decided; the same for random biglides (a
-third with equal legs) at twice the precision; then the time to the certified
-count of the issue's designs: the gap five-bar, the equal-leg biglide and the
-3-RPR (at 1/128 of each span only with ``--three-rpr``: about two minutes).
+whose count and N-connectivity are decided, with the cost and the decided share
+of the count proved in the joint space alone (part of the resolution); the same
+for random biglides (a third with equal legs) at twice the precision; then the
+time to the certified count of the issue's designs: the gap five-bar, the
+equal-leg biglide and the 3-RPR (at 1/128 of each span: about 40 s; skip it
+with ``--no-three-rpr``).
 
-Run: ``.venv/bin/python benchmarks/bench_counts.py [N] [PRECISION] [--three-rpr]``
+Run: ``.venv/bin/python benchmarks/bench_counts.py [N] [PRECISION] [--no-three-rpr]``
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import time
 import numpy as np
 
 from moveability import analyze
+from moveability.joint_space import count_in_joint_space
 from moveability.limits import JointLimit
 from moveability.mechanisms import FiveBar, from_spec
 
@@ -53,6 +56,11 @@ def _sweep(designs: list, eps: float, label: str) -> None:
             rows[resolve].append(
                 (seconds, result.n_regions is not None, result.n_connected is not None)
             )
+    joint = []
+    for m in designs:
+        start = time.perf_counter()
+        found = count_in_joint_space(m)
+        joint.append((time.perf_counter() - start, found is not None and found.decided))
     print(f"{len(designs)} random {label} at precision {eps}")
     print(f"{'':>12} {'median s':>9} {'max s':>7} {'count decided':>14} {'N-conn. decided':>16}")
     for resolve in (False, True):
@@ -65,6 +73,12 @@ def _sweep(designs: list, eps: float, label: str) -> None:
             f"{name:>12} {statistics.median(times):9.2f} {max(times):7.2f} "
             f"{counts:14.0%} {nconn:16.0%}"
         )
+    times = [r[0] for r in joint]
+    share = sum(r[1] for r in joint) / len(joint)
+    print(
+        f"{'joint space':>12} {statistics.median(times):9.2f} {max(times):7.2f} "
+        f"{share:14.0%} {'-':>16}"
+    )
 
 
 def random_biglides(n: int, seed: int = 5) -> list:
@@ -102,7 +116,7 @@ def _timed(label: str, m: object, precision: object, **options: object) -> None:
 def main() -> None:
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 20
     eps = float(sys.argv[2]) if len(sys.argv) > 2 else 0.05
-    with_rpr = "--three-rpr" in sys.argv
+    with_rpr = "--no-three-rpr" not in sys.argv
     analyze(FiveBar(), precision=0.5)  # compile the kernels first
     _sweep(random_five_bars(n), eps, "five-bars")
     _sweep(random_biglides(n), 2 * eps, "biglides (a third with equal legs)")

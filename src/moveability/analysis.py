@@ -29,6 +29,7 @@ from .flows import (
     supports_flows,
 )
 from .intervals import Interval
+from .joint_space import JointSpaceCount, count_in_joint_space
 from .keys import MAX_KEY_BITS
 from .limits import INSIDE
 from .measurement import leaf_volumes, locate
@@ -230,7 +231,11 @@ def analyze(
             f"a precision whose tree holds at most max_leaves={max_leaves} leaves",
             precision,
         ) from None
-    result = Analysis(mechanism, _as_given(eps), tree, generalized_aspects=generalized_aspects)
+    # two dyads: the count is also proved in the joint space (see moveability.joint_space)
+    joint = count_in_joint_space(mechanism) if resolve and not generalized_aspects else None
+    result = Analysis(
+        mechanism, _as_given(eps), tree, generalized_aspects=generalized_aspects, joint_count=joint
+    )
     if extra:
         budget = len(tree) + max(int(resolve_growth * len(tree)), 1 << 15)
         result = resolve_analysis(result, max_leaves=min(max_leaves, budget), progress=progress)
@@ -253,7 +258,7 @@ def resolve_analysis(
     while True:
         tree = result.tree
         below = tree.levels < tree.layout.n_levels
-        hiding = result.open_nodes.any(axis=(0, 2)) & below
+        hiding = result.hiding_leaves() & below
         mask = result.open_leaves() & below
         if int(mask.sum()) > RESOLVE_ROUND:
             # the leaves where a region may hide first, then the necks, coarsest first
@@ -295,6 +300,7 @@ def resolve_analysis(
             generalized_aspects=result.generalized_aspects,
             table=table,
             flows_of=(result, old_index),
+            joint_count=result.joint_count,
         )
 
 
@@ -441,9 +447,12 @@ class Analysis:
         generalized_aspects: bool = False,
         table: SheetTable | None = None,
         flows_of: tuple[Analysis, NDArray[np.intp]] | None = None,
+        joint_count: JointSpaceCount | None = None,
     ) -> None:
         self.mechanism = mechanism
         self.generalized_aspects = bool(generalized_aspects)
+        #: bounds on the count proved in the joint space (two-dyad mechanisms), if sought
+        self.joint_count = joint_count
         #: per pose axis
         self.precisions = _check_precision(precision, len(mechanism.pose_names))
         #: as given: one number, or one per pose axis
@@ -536,9 +545,12 @@ class Analysis:
         between two certified parts whose nearest leaves touch. Refined, the
         parts join there, or the chains get longer until the component splits.
         """
-        mask = np.asarray(self.open_nodes.any(axis=(0, 2)), dtype=bool)
+        mask = self.hiding_leaves()
         if self.n_connected is None:
             mask |= self._w_open
+        if self.complete:
+            # every region is listed: no neck or hiding place can change the count
+            return mask
         g, t = self.graph, self.table
         n, n_post = t.status.shape
         certified = (t.status == IN) | t.group
@@ -559,6 +571,13 @@ class Analysis:
                     source[(g.certain == parts[i]).any(axis=1)] = i
                 mask |= _necks(self._pairs, gap, source, slack)
         return mask
+
+    def hiding_leaves(self) -> NDArray[np.bool_]:
+        """Leaves holding an open node, where a region might hide; none once the
+        listed regions are proved to be all (:attr:`complete`)."""
+        if self.complete:
+            return np.zeros(len(self.areas), dtype=bool)
+        return np.asarray(self.open_nodes.any(axis=(0, 2)), dtype=bool)
 
     def _resolve(self) -> None:
         g, t = self.graph, self.table
@@ -690,7 +709,9 @@ class Analysis:
         ``at_least`` counts the possible components that hold a certified part
         (each holds a region of its own); ``at_most`` counts the certified parts,
         and is None (no bound) while a region may hide in an open node (see
-        :mod:`moveability.flows`). The count is known when they are equal.
+        :mod:`moveability.flows`). Where :attr:`joint_count` holds bounds proved
+        in the joint space (two-dyad mechanisms, with the resolution on), the
+        tighter of both are given. The count is known when they are equal.
 
         Examples
         --------
@@ -702,7 +723,20 @@ class Analysis:
         (2, 2)
         """
         hiding = any(flag.any() for flag in self._open_possible)
-        return len(self.regions), None if hiding else self.graph.certain_sign.size
+        at_least, at_most = len(self.regions), None if hiding else self.graph.certain_sign.size
+        joint = self.joint_count
+        if joint is not None:
+            at_least = max(at_least, joint.at_least)
+            if joint.at_most is not None:
+                at_most = joint.at_most if at_most is None else min(at_most, joint.at_most)
+        return at_least, at_most
+
+    @property
+    def complete(self) -> bool:
+        """Whether the listed regions are proved to be all the regions: then no
+        possible component without a listed region holds one, and every certified
+        part lies in the listed region of its possible component."""
+        return self.count[1] == len(self.regions)
 
     @property
     def n_regions(self) -> int | None:
@@ -735,20 +769,23 @@ class Analysis:
         known (they share a listed region's possible part and may or may not be
         in that region); ``boundary_area``: area of the leaves left undecided;
         ``open_area``: area of the leaves holding an open node (an uncertified
-        node not proved to join a certified part). With three pose axes the keys
-        say ``volume`` for ``area``.
+        node not proved to join a certified part). Once the listed regions are
+        proved to be all (:attr:`complete`), no component, detached part or open
+        node is left. With three pose axes the keys say ``volume`` for ``area``.
         """
         g = self.graph
+        complete = self.complete
+        unresolved = [] if complete else self._unresolved
         touch = np.zeros(self.areas.size, dtype=bool)
-        for row, u in self._unresolved:
+        for row, u in unresolved:
             touch |= (g.possible[row] == u).any(axis=1)
         undecided_leaves = self.tree.status == BOUNDARY
         measure = self.measure_name
-        open_leaves = self.open_nodes.any(axis=(0, 2))
+        open_leaves = self.hiding_leaves()
         return {
-            "components": len(self._unresolved),
+            "components": len(unresolved),
             measure: float(self.areas[touch].sum()),
-            "detached": len(self._extra_certain),
+            "detached": 0 if complete else len(self._extra_certain),
             f"boundary_{measure}": float(self.areas[undecided_leaves].sum()),
             f"open_{measure}": float(self.areas[open_leaves].sum()),
         }
@@ -759,13 +796,14 @@ class Analysis:
         if any(r.equals_workspace for r in self.regions):
             return True
         g = self.graph
+        complete = self.complete
         # every possible component that may hold a region misses a leaf certainly in W
         occupied = [np.zeros(g.n_possible[row], dtype=bool) for row in (0, 1)]
         for _, row, u in self._region_nodes:
             occupied[row][u] = True
         for row in (0, 1):
             for u in range(g.n_possible[row]):
-                if not (occupied[row][u] or self._open_possible[row][u]):
+                if not (occupied[row][u] or (self._open_possible[row][u] and not complete)):
                     continue  # proved to hold no region
                 touch = (g.possible[row] == u).any(axis=1)
                 if not (self._w_certain & ~touch).any():
@@ -896,8 +934,12 @@ class Analysis:
             # a pose outside the box that the pose-level test could not place
             return {"feasible": None, "region": None, "postures": None}
         g = self.graph
+        listed = {(row, u) for _, row, u in self._region_nodes}
+        complete = self.complete
         for row in (0, 1):
             for u in range(g.n_possible[row]):
+                if complete and (row, u) not in listed:
+                    continue  # proved to hold no region
                 if (g.possible[row][leaf] == u).any(axis=1).all():
                     return {"feasible": None, "region": None, "postures": None}
         return {"feasible": False, "region": None, "postures": None}
@@ -995,11 +1037,13 @@ class Analysis:
             keys=self.tree.keys,
             levels=self.tree.levels,
             status=self.tree.status,
+            joint_count=np.array(self.joint_count is not None),
         )
 
 
 def load_analysis(path: str | os.PathLike[str]) -> Analysis:
-    """Read an analysis written by :meth:`Analysis.save` (the sheets are re-certified)."""
+    """Read an analysis written by :meth:`Analysis.save` (the sheets, and the count in
+    the joint space where it was sought, are certified again)."""
     fields = read_archive(path, "a file written by Analysis.save")
     if str(fields.get("format", "")) != _FORMAT:
         raise InvalidParameterError("path", "a file written by Analysis.save", os.fspath(path))
@@ -1015,4 +1059,10 @@ def load_analysis(path: str | os.PathLike[str]) -> Analysis:
     )
     aspects = bool(fields["generalized_aspects"]) if "generalized_aspects" in fields else False
     precision = np.atleast_1d(np.asarray(fields["precision"], dtype=np.float64))
-    return Analysis(mechanism, _as_given(precision), tree, generalized_aspects=aspects)
+    # the joint-space count is proved again, like the sheets (it is deterministic)
+    flag = fields.get("joint_count")
+    sought = flag is not None and flag.shape == () and flag.dtype == bool and bool(flag)
+    joint = count_in_joint_space(mechanism) if sought and not aspects else None
+    return Analysis(
+        mechanism, _as_given(precision), tree, generalized_aspects=aspects, joint_count=joint
+    )

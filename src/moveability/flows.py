@@ -60,6 +60,9 @@ __all__ = [
 Array = NDArray[np.float64]
 #: slack when comparing joint ranges of slots (as in :mod:`moveability.regions`)
 _SPAN_TOL = 1e-9
+#: constraints whose enclosure, grown this many times about its midpoint, meets
+#: their bound count as near a leaf when its own direction is chosen
+_NEAR = 3.0
 
 
 class FaceNeighbours:
@@ -405,11 +408,24 @@ def _posture_flows(
                 if det_rate is not None:
                     steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
                 flows[row, :, c, ff] = slot_ok & steady
+    # the constraints that may be active near the leaf (within _NEAR of its size):
+    # the leaves around one corner then share the direction into it
+    det = Interval(table.det_lo[rows, p], table.det_hi[rows, p])
+    with quiet():
+        near_singular = (sign == 0) | _widened(det).contains(0.0)
+        near = [mechanism.limits[i].pieces(_widened(angles[i])) for i in range(n_legs)]
     _adapted_flows(
-        mechanism, blo, bhi, p, angles, gradients, pieces, combos,
-        usable & regular.all(axis=1), sign, flows, faces, n_fixed, known,
+        mechanism, blo, bhi, p, angles, gradients, (pieces, near), combos,
+        usable & regular.all(axis=1), (sign, near_singular), flows, faces, n_fixed, known,
     )
     return flows, exists, faces
+
+
+def _widened(x: Interval) -> Interval:
+    """The enclosure grown about its midpoint to ``_NEAR`` times its width
+    (unbounded or NaN bounds give NaN: nothing is near)."""
+    mid, half = 0.5 * (x.lo + x.hi), 0.5 * _NEAR * (x.hi - x.lo)
+    return Interval(mid - half, mid + half)
 
 
 def _adapted_flows(
@@ -419,17 +435,23 @@ def _adapted_flows(
     p: int,
     angles: list[Interval],
     gradients: list[list[Interval]],
-    pieces: list[tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_]]],
+    both_pieces: tuple[list[Any], list[Any]],
     combos: list[list[int]],
     usable: NDArray[np.bool_],
-    sign: NDArray[np.int8],
+    signs: tuple[NDArray[np.int8], NDArray[np.bool_]],
     flows: NDArray[np.bool_],
     faces: NDArray[np.uint8],
     first: int,
     known: Any,
 ) -> None:
     """The flows along each leaf's own direction (see :func:`flow_conditions`),
-    written into ``flows`` and ``faces`` from index ``first``, one per slot and sign."""
+    written into ``flows`` and ``faces`` from index ``first``, one per slot and sign.
+
+    ``both_pieces`` holds the joints' pieces over the leaf and near it, ``signs``
+    the sign of det A and whether it may vanish near the leaf: the direction
+    comes from the constraints near the leaf, the conditions from those in it."""
+    pieces, near = both_pieces
+    sign, near_singular = signs
     n, k = lo.shape
     n_legs = len(mechanism.legs)
     if not usable.any():
@@ -462,13 +484,15 @@ def _adapted_flows(
 
     for c in range(len(combos)):
         for row, s in enumerate((1, -1)):
-            direction = np.where((sign == 0)[:, None], unit(s * det_normal), 0.0)
+            normals = [np.where(near_singular[:, None], unit(s * det_normal), 0.0)]
             for i in range(n_legs):
-                _, lower, upper = pieces[i]
+                _, lower, upper = near[i]
                 j = combos[c][i]
-                direction = direction + np.where(lower[j][:, None], unit(joint_normal[i]), 0.0)
-                direction = direction - np.where(upper[j][:, None], unit(joint_normal[i]), 0.0)
-            direction = unit(direction)
+                normals.append(
+                    np.where(lower[j][:, None], unit(joint_normal[i]), 0.0)
+                    - np.where(upper[j][:, None], unit(joint_normal[i]), 0.0)
+                )
+            direction = unit(_into_corner(np.stack(normals, axis=1)))
             moving = usable & (np.abs(direction).sum(axis=1) > 0)
             if not moving.any():
                 continue
@@ -490,6 +514,24 @@ def _adapted_flows(
             flows[row, :, c, index] = ok & steady
             columns = [direction[:, axis] for axis in range(k)]
             faces[index] = _exit_faces(columns, columns)
+
+
+def _into_corner(normals: Array) -> Array:
+    """(n, k): a direction that moves into the corner that the active constraints'
+    unit normals (n, C, k) bound (inactive rows are zero): the one whose dot
+    product with each active normal is 1 (the dual basis), where the normals are
+    independent; their sum elsewhere. With two normals in the plane both are
+    the bisector; with three in space only the first one always exists."""
+    total = normals.sum(axis=1)
+    active = np.abs(normals).sum(axis=2) > 0
+    gram = np.einsum("nck,ndk->ncd", normals, normals)
+    gram += np.eye(normals.shape[1])[None] * ~active[:, :, None]
+    good = np.abs(np.linalg.det(gram)) > 1e-9
+    weights = np.zeros(active.shape)
+    if good.any():
+        weights[good] = np.linalg.solve(gram[good], active[good, :, None].astype(float))[..., 0]
+    dual = np.einsum("nc,nck->nk", weights, normals)
+    return np.where((good & np.isfinite(dual).all(axis=1))[:, None], dual, total)
 
 
 @njit(cache=True, nogil=True)

@@ -56,6 +56,18 @@ class SliderLeg:
     #: :meth:`reach` encloses each branch where the leg may fold too (``x +- [0, h]``)
     branches_at_folds = True
 
+    @property
+    def distal(self) -> float:
+        """The link from the slider to the platform point."""
+        return self.length
+
+    def knee_boxes(self, angles: Interval) -> tuple[list[Interval], ...]:
+        """The slider ``(rho, 0)`` and its first two derivatives along ``rho`` over
+        enclosures of ``rho`` (see :mod:`moveability.joint_space`)."""
+        zero = iv.as_interval(np.zeros(np.shape(angles.lo)))
+        one = iv.as_interval(np.ones(np.shape(angles.lo)))
+        return [angles, zero], [one, zero], [zero, zero]
+
     def angles(self, points: Array, clip: bool = False) -> Array:
         """Slider positions of both branches, shape (m, 2); NaN where unreachable.
 

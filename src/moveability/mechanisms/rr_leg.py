@@ -72,6 +72,13 @@ class RRLeg:
             axis=-1,
         )
 
+    def knee_boxes(self, angles: Interval) -> tuple[list[Interval], ...]:
+        """The elbow ``C(t)`` and its first two derivatives along ``t`` over angle
+        enclosures: ``([Cx, Cy], [Cx', Cy'], [Cx'', Cy''])``; the distal link
+        joins the elbow to the platform point (see :mod:`moveability.joint_space`)."""
+        c, s = iv.cos(angles) * self.proximal, iv.sin(angles) * self.proximal
+        return [c + self.base[0], s + self.base[1]], [-s, c], [-c, -s]
+
     def links(self, pose: Array, angle: float) -> Array:
         """The leg drawn as a polyline: base, elbow, platform point; shape (3, 2)."""
         return np.stack([np.asarray(self.base), self.elbow(np.asarray(angle)), pose[:2]])

@@ -1,0 +1,342 @@
+"""The count of regions proved in the joint space of a mechanism of two dyads.
+
+In the five-bar and the biglide each leg ends with a distal link from a *knee*
+``C_i(q_i)`` (the elbow, or the slider) to the platform point P. Given the
+joints q, P lies on both circles ``|P - C_i| = b_i``; with ``d = |C_1 - C_2|``:
+
+* det A, the cross product of ``P - C_1`` and ``P - C_2``, vanishes exactly
+  where P, C_1 and C_2 are collinear, that is ``d = b_1 + b_2`` or
+  ``d = |b_1 - b_2|``;
+* for ``|b_1 - b_2| < d < b_1 + b_2`` there are two poses, mirror images
+  across the line C_1 C_2, one for each sign of det A, and they vary
+  continuously with q.
+
+So ``(X, q) -> (q, sign det A)`` maps the configurations within the limits with
+det A != 0 homeomorphically onto ``D x {+1, -1}``, where
+``D = {q in Q : |b_1 - b_2| < d(q) < b_1 + b_2}`` and Q is the box of joint
+ranges (a free joint's axis glued into a circle). The regions R_j are the
+components of D, twice. :func:`count_in_joint_space` bounds that number on a
+quadtree of Q:
+
+* a cell is IN when ``d^2`` is certainly inside the open interval over the
+  closed cell, OUT when certainly outside;
+* ``at_least``: possible components (IN or undecided cells, touching at a
+  face or corner) that hold an IN cell; each holds a component of D;
+* ``at_most``: components of the IN cells, once every undecided cell is
+  *attached*: every point of D in it reaches an IN cell within D (see
+  :mod:`moveability.flows`). A cell is attached along a direction in which
+  ``d^2`` moves away from each bound it may meet in the cell, when every cell
+  across the faces the direction leaves through is IN, OUT or attached
+  before it; or, where ``d^2`` is convex (concave) over the cell and meets
+  only the lower (upper) bound, through any face: the set beyond the bound is
+  then convex, and a ray from it through any point of D stays in D up to the
+  cell's boundary.
+
+Only the cells of possible components whose count is still open are refined,
+one level a round, until the bounds meet or a budget is spent.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from . import intervals as iv
+from .flows import attached_nodes, face_neighbours, flow_directions
+from .intervals import Interval
+from .mechanisms.base import Mechanism
+from .status import BOUNDARY, IN, OUT
+from .topology import components
+from .tree import HyperTree
+
+__all__ = ["JointSpaceCount", "count_in_joint_space", "has_dyads"]
+
+Array = NDArray[np.float64]
+#: depth of the first, uniform pass over each joint axis
+START_DEPTH = 6
+#: deepest level of the refinement on each joint axis
+MAX_DEPTH = 26
+#: leaves the quadtree of Q may hold
+MAX_LEAVES = 1 << 18
+#: levels above a leaf at which a convex block is sought, and the most leaves tried
+_BLOCK_LEVELS = 4
+_BLOCK_LEAVES = 256
+#: finest units a block's box is widened by against rounding
+_WIDEN = 1e-6
+
+
+@dataclass(frozen=True)
+class JointSpaceCount:
+    """Bounds on the number of regions R_j, proved in the joint space.
+
+    Attributes
+    ----------
+    at_least, at_most : int, int or None
+        The bounds (``at_most`` None where no upper bound is proved).
+    leaves : int
+        Leaves of the quadtree of Q when the refinement stopped.
+    open_measure : float
+        Measure of Q (rad^2, or joint units) in the undecided leaves of the
+        possible components whose count is still open.
+    """
+
+    at_least: int
+    at_most: int | None
+    leaves: int
+    open_measure: float
+
+    @property
+    def decided(self) -> bool:
+        """Whether the bounds meet."""
+        return self.at_least == self.at_most
+
+
+def has_dyads(mechanism: Mechanism) -> bool:
+    """Whether the mechanism is two dyads meeting at a planar platform point (the
+    five-bar, the biglide): legs that give :meth:`knee_boxes` and a ``distal`` link.
+
+    Examples
+    --------
+    >>> from moveability.mechanisms import FiveBar
+    >>> has_dyads(FiveBar())
+    True
+    """
+    legs = mechanism.legs
+    return (
+        tuple(mechanism.pose_names) == ("x", "y")
+        and len(legs) == 2
+        and all(hasattr(leg, "knee_boxes") and hasattr(leg, "distal") for leg in legs)
+    )
+
+
+def _joint_box(mechanism: Mechanism) -> tuple[Array, Array, tuple[int, ...]]:
+    lo = np.array([lim.lo for lim in mechanism.limits], dtype=np.float64)
+    hi = np.array(
+        [lim.lo + 2 * np.pi if lim.periodic else lim.hi for lim in mechanism.limits],
+        dtype=np.float64,
+    )
+    periodic = tuple(i for i, lim in enumerate(mechanism.limits) if lim.periodic)
+    return lo, hi, periodic
+
+
+class _Distance:
+    """``d^2 = |C_1(q_1) - C_2(q_2)|^2`` over boxes of Q, with its bounds."""
+
+    def __init__(self, mechanism: Mechanism) -> None:
+        self.legs = mechanism.legs
+        b1, b2 = (Interval(float(leg.distal)) for leg in self.legs)  # type: ignore[attr-defined]
+        self.lower = iv.square(b1 - b2)
+        self.upper = iv.square(b1 + b2)
+
+    def terms(self, lo: Array, hi: Array) -> tuple[Interval, list[Interval], list[Interval]]:
+        """``d^2`` (natural and mean-value forms intersected), its gradient and its
+        Hessian ``[h11, h12, h22]`` over the boxes."""
+        q = [Interval(lo[:, i], hi[:, i]) for i in range(2)]
+        (p1, v1, a1), (p2, v2, a2) = (
+            leg.knee_boxes(q[i])  # type: ignore[attr-defined]
+            for i, leg in enumerate(self.legs)
+        )
+        dx, dy = p1[0] - p2[0], p1[1] - p2[1]
+        natural = iv.square(dx) + iv.square(dy)
+        grad = [
+            (dx * v1[0] + dy * v1[1]) * 2.0,
+            -((dx * v2[0] + dy * v2[1]) * 2.0),
+        ]
+        mid = 0.5 * (lo + hi)
+        m1, m2 = (
+            leg.knee_boxes(Interval(mid[:, i]))[0]  # type: ignore[attr-defined]
+            for i, leg in enumerate(self.legs)
+        )
+        mean = iv.square(m1[0] - m2[0]) + iv.square(m1[1] - m2[1])
+        for i in range(2):
+            mean = mean + grad[i] * (q[i] - mid[:, i])
+        value = Interval(np.maximum(natural.lo, mean.lo), np.minimum(natural.hi, mean.hi))
+        hessian = [
+            (v1[0] * v1[0] + v1[1] * v1[1] + dx * a1[0] + dy * a1[1]) * 2.0,
+            -((v1[0] * v2[0] + v1[1] * v2[1]) * 2.0),
+            (v2[0] * v2[0] + v2[1] * v2[1] - dx * a2[0] - dy * a2[1]) * 2.0,
+        ]
+        return value, grad, hessian
+
+    def classify(self, lo: Array, hi: Array) -> NDArray[np.uint8]:
+        value, _, _ = self.terms(lo, hi)
+        inside = (value.lo > self.lower.hi) & (value.hi < self.upper.lo)
+        outside = (value.hi < self.lower.lo) | (value.lo > self.upper.hi)
+        return np.where(inside, IN, np.where(outside, OUT, BOUNDARY)).astype(np.uint8)
+
+
+def _attached(tree: HyperTree, distance: _Distance) -> NDArray[np.bool_]:
+    """The undecided leaves whose every point of D reaches an IN leaf within D."""
+    status = tree.status
+    rows = np.flatnonzero(status == BOUNDARY)
+    leaves = tree.leaves()
+    lo, hi = leaves.lo[rows], leaves.hi[rows]
+    with np.errstate(invalid="ignore", over="ignore"):
+        value, grad, (h11, h12, h22) = distance.terms(lo, hi)
+        high = value.hi >= distance.upper.lo  # may meet the upper bound
+        low = value.lo <= distance.lower.hi  # may meet the lower bound
+        vectors, exits = flow_directions(2)
+        n_flows = vectors.shape[0] + 1
+        ok = np.zeros((rows.size, n_flows), dtype=bool)
+        faces = np.zeros((n_flows, rows.size), dtype=np.uint8)
+        for f, (v, fl) in enumerate(zip(vectors, exits, strict=True)):
+            rate = grad[0] * float(v[0]) + grad[1] * float(v[1])
+            ok[:, f] = (~high | (rate.hi <= 0)) & (~low | (rate.lo >= 0))
+            faces[f] = sum(1 << j for j in fl)
+        det = h11 * h22 - h12 * h12
+        convex = (h11.lo > 0) & (det.lo > 0)
+        concave = (h11.hi < 0) & (det.lo > 0)
+        ok[:, -1] = (convex & ~high) | (concave & ~low)
+        faces[-1] = 0b1111
+    weights = np.left_shift(np.uint64(1), np.arange(n_flows, dtype=np.uint64))
+    bits = (ok.astype(np.uint64) * weights).sum(axis=1, dtype=np.uint64)[:, None]
+    nodes = np.stack([rows, np.zeros_like(rows)], axis=1)
+    neighbours = face_neighbours(tree)
+    done = status != BOUNDARY
+    attached = np.zeros(len(tree), dtype=bool)
+    while True:
+        found = attached_nodes(
+            (done | attached)[:, None],
+            nodes,
+            bits,
+            np.ones((rows.size, 1), dtype=bool),
+            faces,
+            neighbours,
+        )[:, 0]
+        attached |= found
+        blocks = _convex_blocks(tree, distance, neighbours, done | attached)
+        if not blocks.any():
+            return attached
+        attached |= blocks
+
+
+def _convex_blocks(
+    tree: HyperTree, distance: _Distance, neighbours: Any, done: NDArray[np.bool_]
+) -> NDArray[np.bool_]:
+    """Leaves not done that lie in a box B of a coarser level over which ``d^2`` is
+    convex (concave) and meets only the lower (upper) bound, when every leaf
+    across B's boundary is done: every point of D in B then reaches that boundary
+    within D, along the ray from the point of B where ``d^2`` is least (greatest).
+    Several leaves around a point of D's complement (equal distal links: the
+    knees meet) depend on each other; B holds them all."""
+    loose = np.flatnonzero(~done & (tree.status == BOUNDARY))
+    out = np.zeros(len(tree), dtype=bool)
+    if not loose.size or loose.size > _BLOCK_LEAVES:
+        return out
+    anchors = tree.anchors
+    ends = anchors + tree.layout.cell_sizes(tree.levels)
+    pairs = np.concatenate(neighbours.pairs)
+    extent = np.left_shift(np.int64(1), np.asarray(tree.max_depth, dtype=np.int64))
+    scale = (tree.hi - tree.lo) / extent
+    for leaf in loose:
+        if out[leaf]:
+            continue
+        for up in range(1, _BLOCK_LEVELS + 1):
+            size = tree.layout.cell_sizes(np.array([max(int(tree.levels[leaf]) - up, 0)]))[0]
+            b_lo = (anchors[leaf] // size) * size
+            b_hi = b_lo + size
+            inside = ((anchors >= b_lo) & (ends <= b_hi)).all(axis=1)
+            # a little wider than B: convexity over more than B holds over B
+            lo = np.nextafter(tree.lo + b_lo * scale, -np.inf)[None, :] - _WIDEN * scale
+            hi = np.nextafter(tree.lo + b_hi * scale, np.inf)[None, :] + _WIDEN * scale
+            with np.errstate(invalid="ignore", over="ignore"):
+                value, _, (h11, h12, h22) = distance.terms(lo, hi)
+                det = h11 * h22 - h12 * h12
+            convex = h11.lo[0] > 0 and det.lo[0] > 0 and value.hi[0] < distance.upper.lo
+            concave = h11.hi[0] < 0 and det.lo[0] > 0 and value.lo[0] > distance.lower.hi
+            if not (convex or concave):
+                continue
+            # the leaves across B's boundary: neighbours of leaves in B, outside B
+            cross = inside[pairs[:, 0]] & ~inside[pairs[:, 1]]
+            if done[pairs[cross, 1]].all() and not _on_box_edge(tree, b_lo, b_hi):
+                out |= inside & ~done
+                break
+    return out
+
+
+def _on_box_edge(tree: HyperTree, b_lo: NDArray[np.int64], b_hi: NDArray[np.int64]) -> bool:
+    """Whether the box meets a face of the tree's box that is not glued (a stop)."""
+    extent = np.left_shift(np.int64(1), np.asarray(tree.max_depth, dtype=np.int64))
+    for axis in range(tree.ndim):
+        if axis in tree.periodic:
+            continue
+        if b_lo[axis] == 0 or b_hi[axis] == extent[axis]:
+            return True
+    return False
+
+
+def count_in_joint_space(
+    mechanism: Mechanism,
+    *,
+    max_depth: int = MAX_DEPTH,
+    max_leaves: int = MAX_LEAVES,
+) -> JointSpaceCount | None:
+    """Certified bounds on the number of regions of a two-dyad mechanism.
+
+    Returns None for a mechanism that is not two dyads (see :func:`has_dyads`).
+    The quadtree of Q starts uniform at depth ``START_DEPTH`` and is refined
+    where the count stays open, one level a round, to ``max_depth`` per axis
+    or ``max_leaves`` leaves: a deterministic budget.
+
+    Notes
+    -----
+    Each round costs the leaves of the tree (labelling and attachment); the
+    leaves split are those of the open possible components alone, and their
+    number follows the boundary of D there.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability.limits import JointLimit
+    >>> from moveability.mechanisms import FiveBar
+    >>> paper = FiveBar(7, 8, 5, 8, 5, (JointLimit(0, np.pi), JointLimit(0, np.pi)))
+    >>> found = count_in_joint_space(paper)
+    >>> found.at_least, found.at_most
+    (2, 2)
+    """
+    if not has_dyads(mechanism):
+        return None
+    distance = _Distance(mechanism)
+    lo, hi, periodic = _joint_box(mechanism)
+    tree = HyperTree.build(
+        lo,
+        hi,
+        distance.classify,
+        max_depth=max_depth,
+        periodic=periodic,
+        merge=False,
+        stop_level=START_DEPTH,
+        max_leaves=max_leaves,
+    )
+    while True:
+        possible, n_possible = components(tree, status=IN | BOUNDARY, connectivity=2)
+        certain, n_certain = components(tree, status=IN, connectivity=2)
+        undecided = tree.status == BOUNDARY
+        loose = undecided & ~_attached(tree, distance)
+        # certain components per possible component, and possible ones left loose
+        inside = np.flatnonzero(certain >= 0)
+        owner = np.full(n_certain, -1, dtype=np.int64)
+        owner[certain[inside]] = possible[inside]
+        per = np.bincount(owner, minlength=n_possible)
+        has_loose = np.zeros(n_possible, dtype=bool)
+        has_loose[possible[loose]] = True
+        at_least = int((per > 0).sum())
+        at_most = None if loose.any() else n_certain
+        open_parts = has_loose | (per >= 2)
+        mask = undecided & (possible >= 0)
+        mask[mask] = open_parts[possible[mask]]
+        volumes = np.prod(tree.leaves().hi - tree.leaves().lo, axis=1)
+        open_measure = float(volumes[mask].sum())
+        mask &= tree.levels < tree.layout.n_levels
+        room = (max_leaves - len(tree)) // 3
+        if at_least == at_most or not mask.any() or int(mask.sum()) > room:
+            return JointSpaceCount(
+                at_least=2 * at_least,
+                at_most=None if at_most is None else 2 * at_most,
+                leaves=len(tree),
+                open_measure=open_measure,
+            )
+        tree = tree.refine(mask, distance.classify)
