@@ -253,7 +253,8 @@ def test_counts_of_random_biglides():
         result = analyze(m, precision=0.1)
         assert_bounds_hold(result, biglide_count(m))
         decided += result.n_regions is not None
-    assert decided >= 27, decided
+    # at least 95%
+    assert decided >= 29, decided
 
 
 # ----------------------------------------------------------- N-connectivity

@@ -161,9 +161,12 @@ def analyze(
     resolve : bool, optional
         After the pass at the precision, refine below it, one level a round,
         only the leaves that keep the count of regions or N-connectivity open
-        (see :func:`resolve_analysis`); the default. False keeps the plain
-        pass. Mechanisms whose legs give no rates (see
-        :func:`moveability.flows.supports_flows`) keep the plain pass.
+        (see :func:`resolve_analysis`); the default. For the five-bar and the
+        biglide the count of regions is also proved in the joint space (see
+        :mod:`moveability.joint_space`), which often ends the refinement
+        early. False keeps the plain pass. Mechanisms whose legs give no
+        rates (see :func:`moveability.flows.supports_flows`) keep the plain
+        pass.
     resolve_levels : int, optional
         Levels below the precision that the resolution may reach.
     resolve_growth : float, optional

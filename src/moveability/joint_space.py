@@ -60,7 +60,7 @@ START_DEPTH = 6
 #: deepest level of the refinement on each joint axis
 MAX_DEPTH = 26
 #: leaves the quadtree of Q may hold
-MAX_LEAVES = 1 << 18
+MAX_LEAVES = 1 << 16
 #: levels above a leaf at which a convex block is sought, and the most leaves tried
 _BLOCK_LEVELS = 4
 _BLOCK_LEAVES = 256
@@ -231,29 +231,29 @@ def _convex_blocks(
     pairs = np.concatenate(neighbours.pairs)
     extent = np.left_shift(np.int64(1), np.asarray(tree.max_depth, dtype=np.int64))
     scale = (tree.hi - tree.lo) / extent
-    for leaf in loose:
-        if out[leaf]:
+    # the blocks 1 .. _BLOCK_LEVELS levels above each loose leaf, tested at once
+    ups = np.arange(1, _BLOCK_LEVELS + 1)
+    leaf = np.repeat(loose, ups.size)
+    levels = np.maximum(tree.levels[leaf].astype(np.int64) - np.tile(ups, loose.size), 0)
+    size = tree.layout.cell_sizes(levels)
+    b_lo = (anchors[leaf] // size) * size
+    b_hi = b_lo + size
+    # a little wider than B: convexity over more than B holds over B
+    lo = np.nextafter(tree.lo + b_lo * scale, -np.inf) - _WIDEN * scale
+    hi = np.nextafter(tree.lo + b_hi * scale, np.inf) + _WIDEN * scale
+    with np.errstate(invalid="ignore", over="ignore"):
+        value, _, (h11, h12, h22) = distance.terms(lo, hi)
+        det = h11 * h22 - h12 * h12
+    convex = (h11.lo > 0) & (det.lo > 0) & (value.hi < distance.upper.lo)
+    concave = (h11.hi < 0) & (det.lo > 0) & (value.lo > distance.lower.hi)
+    for j in np.flatnonzero(convex | concave):
+        if out[leaf[j]] or _on_box_edge(tree, b_lo[j], b_hi[j]):
             continue
-        for up in range(1, _BLOCK_LEVELS + 1):
-            size = tree.layout.cell_sizes(np.array([max(int(tree.levels[leaf]) - up, 0)]))[0]
-            b_lo = (anchors[leaf] // size) * size
-            b_hi = b_lo + size
-            inside = ((anchors >= b_lo) & (ends <= b_hi)).all(axis=1)
-            # a little wider than B: convexity over more than B holds over B
-            lo = np.nextafter(tree.lo + b_lo * scale, -np.inf)[None, :] - _WIDEN * scale
-            hi = np.nextafter(tree.lo + b_hi * scale, np.inf)[None, :] + _WIDEN * scale
-            with np.errstate(invalid="ignore", over="ignore"):
-                value, _, (h11, h12, h22) = distance.terms(lo, hi)
-                det = h11 * h22 - h12 * h12
-            convex = h11.lo[0] > 0 and det.lo[0] > 0 and value.hi[0] < distance.upper.lo
-            concave = h11.hi[0] < 0 and det.lo[0] > 0 and value.lo[0] > distance.lower.hi
-            if not (convex or concave):
-                continue
-            # the leaves across B's boundary: neighbours of leaves in B, outside B
-            cross = inside[pairs[:, 0]] & ~inside[pairs[:, 1]]
-            if done[pairs[cross, 1]].all() and not _on_box_edge(tree, b_lo, b_hi):
-                out |= inside & ~done
-                break
+        inside = ((anchors >= b_lo[j]) & (ends <= b_hi[j])).all(axis=1)
+        # the leaves across B's boundary: neighbours of leaves in B, outside B
+        cross = inside[pairs[:, 0]] & ~inside[pairs[:, 1]]
+        if done[pairs[cross, 1]].all():
+            out |= inside & ~done
     return out
 
 
