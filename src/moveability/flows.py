@@ -61,8 +61,10 @@ Array = NDArray[np.float64]
 #: slack when comparing joint ranges of slots (as in :mod:`moveability.regions`)
 _SPAN_TOL = 1e-9
 #: constraints whose enclosure, grown this many times about its midpoint, meets
-#: their bound count as near a leaf when its own direction is chosen
-_NEAR = 3.0
+#: their bound count as near a leaf when its own direction is chosen: the leaves
+#: of a cluster around a corner (two stops and the singular surface of a 3-RPR
+#: span about ten leaves) then share one direction and never wait on each other
+_NEAR = 16.0
 
 
 class FaceNeighbours:
