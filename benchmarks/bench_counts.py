@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 from moveability import analyze
-from moveability.joint_space import count_in_joint_space
+from moveability.analysis.joint_space import count_in_joint_space
 from moveability.limits import JointLimit
 from moveability.mechanisms import FiveBar, from_spec
 

@@ -46,7 +46,7 @@ from numpy.typing import NDArray
 
 import moveability
 from moveability import BOUNDARY, IN, OUT, HyperTree, adjacency, components, project
-from moveability.topology import directions
+from moveability.hypertree.topology import directions
 
 try:  # not on Windows
     import resource

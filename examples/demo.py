@@ -20,9 +20,9 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 
 from moveability import analyze, load_spec
-from moveability.plot import FIGURES, figure, figures_for
-from moveability.report import write_report
-from moveability.vtk import export_vtk
+from moveability.output.plot import FIGURES, figure, figures_for
+from moveability.output.report import write_report
+from moveability.output.vtk import export_vtk
 
 HERE = Path(__file__).parent
 OUT = HERE.parent / "out"

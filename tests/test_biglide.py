@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from moveability import analyze
+from moveability.hypertree.status import IN
 from moveability.limits import JointLimit
 from moveability.mechanisms import Biglide
-from moveability.status import IN
 
 DESIGNS = [
     (5.0, 4.0, (-6.0, 6.0), (-6.0, 6.0)),
@@ -148,7 +148,7 @@ def test_figures_draw_the_sliders(tmp_path):
     import matplotlib
 
     matplotlib.use("Agg")
-    from moveability.plot import FIGURES, figure
+    from moveability.output.plot import FIGURES, figure
 
     result = analyze(_mechanism(DESIGNS[0]), precision=0.2)
     pose = np.array([1.0, 2.0])

@@ -410,7 +410,7 @@ def test_missing_points_file(fake, spec, tmp_path):
 # ------------------------------------------------------------------ end to end
 @pytest.fixture
 def real(spec):
-    pytest.importorskip("moveability.analysis")
+    pytest.importorskip("moveability.analysis.result")
     return spec
 
 

@@ -19,13 +19,13 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import shortest_path
 
 from moveability import analyze
+from moveability.analysis.sheets import classify_sheets
 from moveability.cli import main
+from moveability.hypertree.status import IN
+from moveability.hypertree.topology import adjacency
 from moveability.intervals import Interval
 from moveability.mechanisms import from_spec
 from moveability.mechanisms.base import REGULAR
-from moveability.sheets import classify_sheets
-from moveability.status import IN
-from moveability.topology import adjacency
 from region_references import (
     EQUAL_BIGLIDE,
     GAP_FIVE_BAR,

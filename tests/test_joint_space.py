@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from moveability import analyze, load_analysis
-from moveability.flows import _into_corner
-from moveability.joint_space import count_in_joint_space, has_dyads
+from moveability.analysis.flows import _into_corner
+from moveability.analysis.joint_space import count_in_joint_space, has_dyads
 from moveability.mechanisms import FiveBar, from_spec
 from region_references import (
     EQUAL_BIGLIDE,

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from moveability.errors import ResolutionError
-from moveability.keys import KeyLayout
+from moveability.hypertree.keys import KeyLayout
 
 depths = st.lists(st.integers(0, 5), min_size=1, max_size=5)
 

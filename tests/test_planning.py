@@ -5,10 +5,10 @@ import pytest
 from click.testing import CliRunner
 
 from moveability import analyze, load_spec
+from moveability.analysis.planning import PlanningError
 from moveability.cli import main
 from moveability.limits import JointLimit
 from moveability.mechanisms import FiveBar
-from moveability.planning import PlanningError
 
 DESIGNS = [
     ((7, 8, 5, 8, 5), (0.0, np.pi)),

@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from moveability import analyze, load_spec
 from moveability.cli import main
-from moveability.plot import (
+from moveability.output.plot import (
     plot_joint_space,
     plot_path,
     plot_postures,

@@ -12,10 +12,10 @@ from click.testing import CliRunner
 from moveability import HyperTree, analyze, load_spec
 from moveability.cli import main
 from moveability.errors import InvalidParameterError
-from moveability.measurement import locate
-from moveability.plot import figure, region_cells
-from moveability.plot3d import boundary_faces, plot_regions_3d, plot_slices
-from moveability.status import BOUNDARY
+from moveability.hypertree.measurement import locate
+from moveability.hypertree.status import BOUNDARY
+from moveability.output.plot import figure, region_cells
+from moveability.output.plot3d import boundary_faces, plot_regions_3d, plot_slices
 
 SPEC = "examples/three-rpr.toml"
 PRECISION = (2.0, 2.0, 0.4)
@@ -236,7 +236,7 @@ def test_cli_plot_3d_figures(tmp_path):
 
 
 def test_report_uses_the_3d_figures(result, tmp_path):
-    from moveability.report import write_report
+    from moveability.output.report import write_report
 
     with open(write_report(result, tmp_path), encoding="utf-8") as handle:
         page = handle.read()

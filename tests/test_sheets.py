@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
+from moveability.analysis.sheets import classify_sheets
+from moveability.hypertree.status import IN, OUT
 from moveability.limits import JointLimit
 from moveability.mechanisms import FiveBar
 from moveability.mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REGULAR
-from moveability.sheets import classify_sheets
-from moveability.status import IN, OUT
 
 DESIGNS = [
     ((7, 8, 5, 8, 5), (0.0, np.pi), (0.0, np.pi)),

@@ -29,13 +29,13 @@ import pytest
 from scipy import ndimage
 
 from moveability import analyze
+from moveability.analysis.sheets import classify_sheets
+from moveability.hypertree.measurement import locate
+from moveability.hypertree.status import IN, OUT
 from moveability.intervals import Interval
 from moveability.limits import INSIDE, OUTSIDE, JointLimit, classify_angles
-from moveability.measurement import locate
 from moveability.mechanisms import FiveBar
 from moveability.mechanisms.base import FOLD_INNER, FOLD_OUTER, REGULAR
-from moveability.sheets import classify_sheets
-from moveability.status import IN, OUT
 from references import pi_fraction
 
 PI = np.pi
@@ -46,7 +46,7 @@ N_GRID = 500
 def _possible_label(result, row, leaf, posture, point):
     """Possible component of the sub-node holding the configuration of ``posture`` at
     ``point``: the piece of each limited joint's range its value lies in."""
-    from moveability.regions import _pieces, split_legs
+    from moveability.analysis.regions import _pieces, split_legs
 
     g, t, m = result.graph, result.table, result.mechanism
     q = m.joint_angles(point[None, :], clip=True)[0, posture]

@@ -10,7 +10,7 @@ from click.testing import CliRunner
 from hypothesis import given
 from hypothesis import strategies as st
 
-import moveability.analysis
+import moveability.analysis.result
 from moveability import analyze, load_spec
 from moveability.cli import main
 from moveability.errors import InvalidParameterError, ResolutionError
@@ -176,14 +176,14 @@ def test_other_sweep_in_out_is_refused(tmp_path):
 # ------------------------------------------------------------------ failures
 def test_failing_designs_are_recorded_and_the_sweep_goes_on(tmp_path, monkeypatch):
     out = tmp_path / "designs.csv"
-    original = moveability.analysis.analyze
+    original = moveability.analysis.result.analyze
 
     def fragile(spec, precision, **kwargs):
         if spec["parameters"]["L1"] == 9.0:
             raise ResolutionError("precision", "a precision that fits", precision)
         return original(spec, precision, **kwargs)
 
-    monkeypatch.setattr(moveability.analysis, "analyze", fragile)
+    monkeypatch.setattr(moveability.analysis.result, "analyze", fragile)
     result = sweep(
         "--vary", "L1=8:9:2", "--vary", "theta1.min=-1:4:2", "-p", "0.5", "--out", str(out)
     )
@@ -204,7 +204,7 @@ def test_failing_designs_are_recorded_and_the_sweep_goes_on(tmp_path, monkeypatc
     calls = count_designs(monkeypatch)
     args = ["--vary", "L1=8:9:2", "--vary", "theta1.min=-1:4:2", "-p", "0.5", "--out", str(out)]
     assert "0 computed" in sweep(*args).output
-    monkeypatch.setattr(moveability.analysis, "analyze", original)
+    monkeypatch.setattr(moveability.analysis.result, "analyze", original)
     result = sweep(*args, "--retry-errors")
     assert "3 computed, 1 already in" in result.output and "2 failed" in result.output
     assert sorted(calls) == [(8.0, 4.0), (9.0, -1.0), (9.0, 4.0)]

@@ -20,10 +20,10 @@ import pytest
 from scipy import ndimage
 
 from moveability import analyze
+from moveability.hypertree.measurement import locate
+from moveability.hypertree.status import BOUNDARY, IN
 from moveability.limits import JointLimit
-from moveability.measurement import locate
 from moveability.mechanisms import ThreeRPR
-from moveability.status import BOUNDARY, IN
 
 PAPER_LIKE = ([[0, 0], [15.91, 0], [0, 10]], [[0, 0], [17.04, 0], [13.24, 16.10]], (10, 25))
 DESIGNS = [

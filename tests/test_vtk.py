@@ -9,9 +9,9 @@ from click.testing import CliRunner
 
 from moveability import analyze, load_spec
 from moveability.cli import main
-from moveability.measurement import locate
-from moveability.plot import region_cells
-from moveability.vtk import VTK_HEXAHEDRON, VTK_QUAD, export_vtk
+from moveability.hypertree.measurement import locate
+from moveability.output.plot import region_cells
+from moveability.output.vtk import VTK_HEXAHEDRON, VTK_QUAD, export_vtk
 
 SPEC = "examples/three-rpr.toml"
 PRECISION = (2.0, 2.0, 0.4)

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from moveability import analyze
+from moveability.analysis.wxq import analyze_wxq
 from moveability.limits import JointLimit
 from moveability.mechanisms import FiveBar
-from moveability.wxq import analyze_wxq
 
 DESIGNS = [
     ((7.0, 8.0, 5.0, 8.0, 5.0), (0.0, np.pi)),

@@ -7,20 +7,20 @@ octree whose leaves are IN, OUT or BOUNDARY.
 
 from importlib.metadata import PackageNotFoundError, version
 
-from .analysis import Analysis, Region, analyze, load_analysis
+from .analysis.result import Analysis, Region, analyze, load_analysis
 from .errors import (
     IncompatibleTreesError,
     InvalidParameterError,
     MoveabilityError,
     ResolutionError,
 )
-from .measurement import leaf_volumes, locate, measure
-from .projection import project
-from .setops import complement, difference, equals, intersection, union
+from .hypertree.measurement import leaf_volumes, locate, measure
+from .hypertree.projection import project
+from .hypertree.setops import complement, difference, equals, intersection, union
+from .hypertree.status import BOUNDARY, IN, OUT, Status
+from .hypertree.topology import adjacency, components
+from .hypertree.tree import HyperTree, Leaves, load
 from .spec import load_spec
-from .status import BOUNDARY, IN, OUT, Status
-from .topology import adjacency, components
-from .tree import HyperTree, Leaves, load
 
 try:
     __version__ = version("moveability")

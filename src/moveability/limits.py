@@ -93,7 +93,7 @@ class JointLimit:
         An enclosure of a limited revolute joint may hold values on both sides of a
         stop: near ``hi`` and, a turn on, near ``lo``. Piece 0 is where the
         enclosure enters the range, piece 1 its next turn from ``lo`` (see
-        :func:`moveability.regions.region_graph`). Returns ``(exists, lower,
+        :func:`moveability.analysis.regions.region_graph`). Returns ``(exists, lower,
         upper)``, each of shape (2, ...): whether the piece may hold values,
         whether its lower end is a lower stop inside the enclosure (a motion that
         never decreases the joint keeps such values valid), and whether its upper

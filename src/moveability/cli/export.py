@@ -60,9 +60,9 @@ def export_command(
     with options.reporting_errors():
         mechanism = options.load_mechanism(spec)
         result = options.run_analysis(mechanism, precision, options.progress_reporter())
-        from ..plot import region_cells
-        from ..status import BOUNDARY
-        from ..vtk import export_vtk
+        from ..hypertree.status import BOUNDARY
+        from ..output.plot import region_cells
+        from ..output.vtk import export_vtk
 
         paths = export_vtk(result, out)
         measure = result.measure_name

@@ -243,10 +243,10 @@ def make_mechanism(spec: Mapping[str, Any]) -> Any:
 def run_analysis(
     mechanism: Any, precision: float, progress: Callable[..., None] | None, **options: Any
 ) -> Any:
-    """The analysis of ``mechanism`` (``moveability.analysis.analyze``), refined
+    """The analysis of ``mechanism`` (``moveability.analysis.result.analyze``), refined
     below the precision where the count is open unless the command was given
     ``--no-resolve`` (see :func:`resolve_option`)."""
-    from ..analysis import analyze
+    from ..analysis.result import analyze
 
     options.setdefault("resolve", wants_resolution())
     return analyze(mechanism, precision=precision, progress=progress, **options)

@@ -26,7 +26,7 @@ def _pose(text: str | None) -> np.ndarray | None:
 
 def _check_figure(name: str, mechanism: object) -> None:
     """Refuse, before the analysis, a figure drawn for the other number of pose axes."""
-    from ..plot import FIGURES, FIGURES_3D
+    from ..output.plot import FIGURES, FIGURES_3D
 
     axes = tuple(getattr(mechanism, "pose_names", ()))
     fitting = {2: FIGURES, 3: FIGURES_3D}.get(len(axes), ())
@@ -89,7 +89,7 @@ def plot_command(
     precision: float,
 ) -> None:
     """Draw one figure of the analysis of the manipulator of SPEC."""
-    from ..planning import PlanningError
+    from ..analysis.planning import PlanningError
 
     ext = os.path.splitext(out)[1].lower()
     allowed = (".gif",) if animate else (".png", ".svg")
@@ -111,11 +111,11 @@ def plot_command(
         _check_figure(name, mechanism)
         poses = options.read_points(points, mechanism.pose_names) if points else None
         result = options.run_analysis(mechanism, precision, options.progress_reporter())
-        from ..plot import animate_path, figure
+        from ..output.plot import animate_path, figure
 
         try:
             if animate:
-                from ..plot import _default_points
+                from ..output.plot import _default_points
 
                 motion = result.plan(poses if poses is not None else _default_points(result))
                 animate_path(result, motion, out)

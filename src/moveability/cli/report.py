@@ -28,7 +28,7 @@ def report_command(spec: str, out: str, precision: float) -> None:
     with options.reporting_errors():
         mechanism = options.load_mechanism(spec)
         result = options.run_analysis(mechanism, precision, options.progress_reporter())
-        from ..report import write_report
+        from ..output.report import write_report
 
         path = write_report(result, out)
     click.echo(path)

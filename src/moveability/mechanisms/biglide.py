@@ -63,7 +63,7 @@ class SliderLeg:
 
     def knee_boxes(self, angles: Interval) -> tuple[list[Interval], ...]:
         """The slider ``(rho, 0)`` and its first two derivatives along ``rho`` over
-        enclosures of ``rho`` (see :mod:`moveability.joint_space`)."""
+        enclosures of ``rho`` (see :mod:`moveability.analysis.joint_space`)."""
         zero = iv.as_interval(np.zeros(np.shape(angles.lo)))
         one = iv.as_interval(np.ones(np.shape(angles.lo)))
         return [angles, zero], [one, zero], [zero, zero]

@@ -75,7 +75,7 @@ class RRLeg:
     def knee_boxes(self, angles: Interval) -> tuple[list[Interval], ...]:
         """The elbow ``C(t)`` and its first two derivatives along ``t`` over angle
         enclosures: ``([Cx, Cy], [Cx', Cy'], [Cx'', Cy''])``; the distal link
-        joins the elbow to the platform point (see :mod:`moveability.joint_space`)."""
+        joins the elbow to the platform point (see :mod:`moveability.analysis.joint_space`)."""
         c, s = iv.cos(angles) * self.proximal, iv.sin(angles) * self.proximal
         return [c + self.base[0], s + self.base[1]], [-s, c], [-c, -s]
 

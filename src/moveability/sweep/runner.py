@@ -177,7 +177,7 @@ def design_row(
     from .designs import apply_design
 
     if analyze is None:
-        from ..analysis import analyze as analysis
+        from ..analysis.result import analyze as analysis
 
         run: Callable[..., Any] = functools.partial(analysis, resolve=resolve)
     else:

@@ -27,9 +27,9 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from .limits import JointLimit
+from ..hypertree.status import IN
+from ..limits import JointLimit
 from .sheets import SheetTable
-from .status import IN
 
 __all__ = ["RegionGraph", "region_graph", "split_legs"]
 

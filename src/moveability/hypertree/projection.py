@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import InvalidParameterError
+from ..errors import InvalidParameterError
 from .keys import KeyLayout
 from .setops import union
 from .status import BOUNDARY, IN, OUT

@@ -24,7 +24,7 @@ quadtree of Q:
   face or corner) that hold an IN cell; each holds a component of D;
 * ``at_most``: components of the IN cells, once every undecided cell is
   *attached*: every point of D in it reaches an IN cell within D (see
-  :mod:`moveability.flows`). A cell is attached along a direction in which
+  :mod:`moveability.analysis.flows`). A cell is attached along a direction in which
   ``d^2`` moves away from each bound it may meet in the cell, when every cell
   across the faces the direction leaves through is IN, OUT or attached
   before it; or, where ``d^2`` is convex (concave) over the cell and meets
@@ -44,13 +44,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from . import intervals as iv
+from .. import intervals as iv
+from ..hypertree.status import BOUNDARY, IN, OUT
+from ..hypertree.topology import components
+from ..hypertree.tree import HyperTree
+from ..intervals import Interval
+from ..mechanisms.base import Mechanism
 from .flows import attached_nodes, face_neighbours, flow_directions
-from .intervals import Interval
-from .mechanisms.base import Mechanism
-from .status import BOUNDARY, IN, OUT
-from .topology import components
-from .tree import HyperTree
 
 __all__ = ["JointSpaceCount", "count_in_joint_space", "has_dyads"]
 

@@ -2,8 +2,8 @@
 
 :func:`analyze` subdivides the workspace box into a 2^k-tree whose leaves are
 split until every posture sheet over them is certified (see
-:mod:`moveability.sheets`) or the leaf is ``precision`` wide. The regions come
-from :mod:`moveability.regions`; every answer is three-valued.
+:mod:`moveability.analysis.sheets`) or the leaf is ``precision`` wide. The regions come
+from :mod:`moveability.analysis.regions`; every answer is three-valued.
 """
 
 from __future__ import annotations
@@ -19,7 +19,16 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import shortest_path
 
-from .errors import InvalidParameterError, ResolutionError
+from ..errors import InvalidParameterError, ResolutionError
+from ..hypertree.keys import MAX_KEY_BITS
+from ..hypertree.measurement import leaf_volumes, locate
+from ..hypertree.status import BOUNDARY, IN, OUT
+from ..hypertree.topology import adjacency
+from ..hypertree.tree import HyperTree, read_archive
+from ..intervals import Interval
+from ..limits import INSIDE
+from ..mechanisms import Mechanism, from_spec
+from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR
 from .flows import (
     attached_nodes,
     dead_or_certified,
@@ -28,18 +37,9 @@ from .flows import (
     slot_spans,
     supports_flows,
 )
-from .intervals import Interval
 from .joint_space import JointSpaceCount, count_in_joint_space
-from .keys import MAX_KEY_BITS
-from .limits import INSIDE
-from .measurement import leaf_volumes, locate
-from .mechanisms import Mechanism, from_spec
-from .mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR
 from .regions import RegionGraph, region_graph
 from .sheets import SheetTable, classify_sheets, stack_tables
-from .status import BOUNDARY, IN, OUT
-from .topology import adjacency
-from .tree import HyperTree, read_archive
 
 __all__ = [
     "RESOLVE_GROWTH",
@@ -163,9 +163,9 @@ def analyze(
         only the leaves that keep the count of regions or N-connectivity open
         (see :func:`resolve_analysis`); the default. For the five-bar and the
         biglide the count of regions is also proved in the joint space (see
-        :mod:`moveability.joint_space`), which often ends the refinement
+        :mod:`moveability.analysis.joint_space`), which often ends the refinement
         early. False keeps the plain pass. Mechanisms whose legs give no
-        rates (see :func:`moveability.flows.supports_flows`) keep the plain
+        rates (see :func:`moveability.analysis.flows.supports_flows`) keep the plain
         pass.
     resolve_levels : int, optional
         Levels below the precision that the resolution may reach.
@@ -184,7 +184,7 @@ def analyze(
     (2, False)
     """
     if not isinstance(mechanism, Mechanism):
-        from .spec import load_spec
+        from ..spec import load_spec
 
         mechanism = from_spec(load_spec(mechanism))
     eps = _check_precision(precision, len(mechanism.pose_names))
@@ -234,7 +234,7 @@ def analyze(
             f"a precision whose tree holds at most max_leaves={max_leaves} leaves",
             precision,
         ) from None
-    # two dyads: the count is also proved in the joint space (see moveability.joint_space)
+    # two dyads: the count is also proved in the joint space (see moveability.analysis.joint_space)
     joint = count_in_joint_space(mechanism) if resolve and not generalized_aspects else None
     result = Analysis(
         mechanism, _as_given(eps), tree, generalized_aspects=generalized_aspects, joint_count=joint
@@ -489,7 +489,7 @@ class Analysis:
     # ------------------------------------------------------------ regions
     def _attach(self, leaves: Any, reuse: tuple[Any, NDArray[np.intp]] | None = None) -> None:
         """Nodes whose every valid configuration joins a certified sheet (see
-        :mod:`moveability.flows`); the others, alive and uncertified, are *open*:
+        :mod:`moveability.analysis.flows`); the others, alive and uncertified, are *open*:
         a region might hide there. ``reuse`` carries the flows of an analysis
         this one refines, with the old index of each leaf (-1 for new ones);
         ``leaves`` are the tree's leaves."""
@@ -679,7 +679,7 @@ class Analysis:
         has a configuration in the region of certified part ``c`` (sign row ``row``).
 
         A node is *attached to c alone* when its flows (see
-        :mod:`moveability.flows`) lead every valid configuration to certified
+        :mod:`moveability.analysis.flows`) lead every valid configuration to certified
         sheets of ``c`` through nodes attached the same way. A leaf qualifies
         when one of its nodes is certified in ``c`` or attached to c alone, has
         det A of the region's sign throughout and every joint within its limits
@@ -712,7 +712,7 @@ class Analysis:
         ``at_least`` counts the possible components that hold a certified part
         (each holds a region of its own); ``at_most`` counts the certified parts,
         and is None (no bound) while a region may hide in an open node (see
-        :mod:`moveability.flows`). Where :attr:`joint_count` holds bounds proved
+        :mod:`moveability.analysis.flows`). Where :attr:`joint_count` holds bounds proved
         in the joint space (two-dyad mechanisms, with the resolution on), the
         tighter of both are given. The count is known when they are equal.
 
@@ -845,7 +845,7 @@ class Analysis:
         Consecutive configurations are at most ``step`` (default: the precision)
         apart in pose and in each joint; every configuration satisfies the
         constraints, keeps the region's sign of det A and respects the limits.
-        Raises :class:`moveability.planning.PlanningError` (exit 3 in the CLI)
+        Raises :class:`moveability.analysis.planning.PlanningError` (exit 3 in the CLI)
         when no region is known to hold every pose.
 
         Examples

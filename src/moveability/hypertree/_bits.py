@@ -1,4 +1,4 @@
-"""Compiled bit interleaving for :class:`moveability.keys.KeyLayout`.
+"""Compiled bit interleaving for :class:`moveability.hypertree.keys.KeyLayout`.
 
 A profile of :func:`moveability.project` at 17 million leaves spent half its
 time decoding keys bit by bit with whole-array numpy passes (one per key bit);

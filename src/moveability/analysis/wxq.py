@@ -29,18 +29,18 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .analysis import _check_precision
-from .errors import ResolutionError
-from .intervals import Interval
-from .keys import MAX_KEY_BITS
-from .limits import INSIDE, OUTSIDE, classify_angles
-from .measurement import measure
-from .mechanisms import Mechanism
-from .mechanisms.base import REACH_OUT, REGULAR
-from .projection import project
-from .status import BOUNDARY, IN, OUT
-from .topology import components
-from .tree import HyperTree
+from ..errors import ResolutionError
+from ..hypertree.keys import MAX_KEY_BITS
+from ..hypertree.measurement import measure
+from ..hypertree.projection import project
+from ..hypertree.status import BOUNDARY, IN, OUT
+from ..hypertree.topology import components
+from ..hypertree.tree import HyperTree
+from ..intervals import Interval
+from ..limits import INSIDE, OUTSIDE, classify_angles
+from ..mechanisms import Mechanism
+from ..mechanisms.base import REACH_OUT, REGULAR
+from .result import _check_precision
 
 __all__ = ["WxQAnalysis", "WxQRegion", "analyze_wxq"]
 

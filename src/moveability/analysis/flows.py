@@ -38,13 +38,13 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from .intervals import Interval
-from .mechanisms.base import REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
+from ..hypertree.status import BOUNDARY, IN
+from ..hypertree.topology import adjacency
+from ..hypertree.tree import HyperTree
+from ..intervals import Interval
+from ..mechanisms.base import REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
 from .regions import split_legs
 from .sheets import SheetTable
-from .status import BOUNDARY, IN
-from .topology import adjacency
-from .tree import HyperTree
 
 __all__ = [
     "FaceNeighbours",
@@ -58,7 +58,7 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-#: slack when comparing joint ranges of slots (as in :mod:`moveability.regions`)
+#: slack when comparing joint ranges of slots (as in :mod:`moveability.analysis.regions`)
 _SPAN_TOL = 1e-9
 #: constraints whose enclosure, grown this many times about its midpoint, meets
 #: their bound count as near a leaf when its own direction is chosen: the leaves
@@ -263,7 +263,7 @@ def flow_conditions(
     ``nodes`` is an (m, 2) array of (leaf, posture); ``lo``, ``hi`` and ``table``
     describe all the leaves. A node's configurations are split by the piece of
     each limited joint's range they lie in (its *slots*, as in
-    :func:`moveability.regions.region_graph`). The flows tried are the
+    :func:`moveability.analysis.regions.region_graph`). The flows tried are the
     directions of :func:`flow_directions` and, for planar poses, the turns about
     each leg's ``turn_centre`` (both senses): a turn keeps that leg's reach and
     moves its joint at the leg's ``turn_rate`` (the base of an RR leg: the leg
@@ -587,7 +587,7 @@ def slot_spans(
     table: SheetTable, nodes: NDArray[np.intp], limits: tuple[Any, ...]
 ) -> NDArray[np.float64]:
     """(m, slots, legs, 2): the range of values of each limited revolute joint in each
-    slot of the nodes (see :func:`moveability.regions.split_legs`)."""
+    slot of the nodes (see :func:`moveability.analysis.regions.split_legs`)."""
     from .regions import _pieces
 
     split = split_legs(limits)

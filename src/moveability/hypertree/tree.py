@@ -1,7 +1,7 @@
 """The generalized octree: :class:`HyperTree`, a k-dimensional 2^k-tree.
 
 A tree is stored as a *linear* tree: the leaves only, as three parallel numpy
-arrays sorted by their Morton-style key (see :mod:`moveability.keys`):
+arrays sorted by their Morton-style key (see :mod:`moveability.hypertree.keys`):
 
 ``keys`` (uint64)
     the key of the lower corner of each leaf;
@@ -24,7 +24,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InvalidParameterError, ResolutionError
+from ..errors import InvalidParameterError, ResolutionError
 from .keys import KeyLayout
 from .status import BOUNDARY, IN, OUT, is_valid_status
 from .subdivision import Progress, merge_siblings, split_leaves, subdivide
@@ -121,7 +121,7 @@ class HyperTree:
     max_depth : tuple of int
         Maximal depth of each axis.
     keys, levels, status : array_like
-        The leaves, sorted by key (see :mod:`moveability.keys`).
+        The leaves, sorted by key (see :mod:`moveability.hypertree.keys`).
     periodic : sequence of int
         Axes whose two ends are glued.
 

@@ -1,7 +1,7 @@
 """Planning a motion through given poses inside one region R_j.
 
 The motion follows a shortest chain of the certain graph (see
-:mod:`moveability.regions`) between certified sheets holding the poses. Within
+:mod:`moveability.analysis.regions`) between certified sheets holding the poses. Within
 a leaf whose sheet is certified the pose moves along straight segments (the
 leaf is convex, and every configuration of the sheet over it is valid). Within
 a leaf where a leg folds, it moves through the mechanism's hub and fold point
@@ -21,12 +21,12 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order
 
-from .errors import MoveabilityError
-from .mechanisms.base import REGULAR
-from .status import IN
+from ..errors import MoveabilityError
+from ..hypertree.status import IN
+from ..mechanisms.base import REGULAR
 
 if TYPE_CHECKING:
-    from .analysis import Analysis
+    from .result import Analysis
 
 __all__ = ["PlanningError", "plan_motion"]
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import IncompatibleTreesError, ResolutionError
+from ..errors import IncompatibleTreesError, ResolutionError
 from .keys import KeyLayout
 from .status import AND_TABLE, NOT_TABLE, OR_TABLE
 from .subdivision import merge_siblings

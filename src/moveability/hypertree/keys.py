@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import ResolutionError
 from . import _bits
-from .errors import ResolutionError
 
 __all__ = ["MAX_KEY_BITS", "KeyLayout"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InvalidParameterError
+from ..errors import InvalidParameterError
 from .status import BOUNDARY, IN, OUT
 from .tree import HyperTree, _to_coordinates
 

@@ -25,12 +25,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import InvalidParameterError
-from .status import BOUNDARY
-from .tree import HyperTree, _to_coordinates
+from ..errors import InvalidParameterError
+from ..hypertree.status import BOUNDARY
+from ..hypertree.tree import HyperTree, _to_coordinates
 
 if TYPE_CHECKING:
-    from .analysis import Analysis
+    from ..analysis.result import Analysis
 
 __all__ = ["VTK_HEXAHEDRON", "VTK_QUAD", "export_vtk", "write_vtu"]
 

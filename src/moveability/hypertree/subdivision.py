@@ -12,7 +12,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import ResolutionError
+from ..errors import ResolutionError
 from .keys import KeyLayout
 from .status import BOUNDARY
 

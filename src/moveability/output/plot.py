@@ -14,14 +14,14 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .status import IN, OUT
+from ..hypertree.status import IN, OUT
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from .analysis import Analysis
-    from .mechanisms.base import Mechanism
+    from ..analysis.result import Analysis
+    from ..mechanisms.base import Mechanism
 
 __all__ = [
     "FIGURES",
@@ -43,7 +43,7 @@ PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F
 UNDECIDED = "#BBBBBB"
 #: figures of mechanisms with two pose axes
 FIGURES = ("workspace", "postures", "regions", "joint-space", "path")
-#: figures of mechanisms with three pose axes (see :mod:`moveability.plot3d`)
+#: figures of mechanisms with three pose axes (see :mod:`moveability.output.plot3d`)
 FIGURES_3D = ("slices", "regions-3d")
 
 Array = NDArray[np.float64]
@@ -370,7 +370,7 @@ def plot_joint_space(result: Analysis, ax: Axes | None = None, samples: int = 4)
         )
     from matplotlib.lines import Line2D
 
-    from .mechanisms import FiveBar
+    from ..mechanisms import FiveBar
 
     lims = m.limits
     qs = [np.linspace(lim.lo, lim.lo + 2 * np.pi if lim.periodic else lim.hi, 400) for lim in lims]
@@ -504,7 +504,7 @@ def figure(
     Asking a figure of the other number of pose axes raises
     :class:`~moveability.errors.InvalidParameterError` naming ``figure``.
     """
-    from .errors import InvalidParameterError
+    from ..errors import InvalidParameterError
 
     if name not in FIGURES + FIGURES_3D:
         raise InvalidParameterError("figure", f"one of {', '.join(FIGURES + FIGURES_3D)}", name)

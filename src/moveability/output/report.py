@@ -13,10 +13,10 @@ import json
 import os
 from typing import TYPE_CHECKING, Any
 
-from .errors import MoveabilityError
+from ..errors import MoveabilityError
 
 if TYPE_CHECKING:
-    from .analysis import Analysis
+    from ..analysis.result import Analysis
 
 __all__ = ["write_report"]
 

@@ -26,10 +26,10 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import NDArray
 
-from .intervals import Interval
-from .limits import INSIDE, OUTSIDE
-from .mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
-from .status import BOUNDARY, IN, OUT
+from ..hypertree.status import BOUNDARY, IN, OUT
+from ..intervals import Interval
+from ..limits import INSIDE, OUTSIDE
+from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
 
 __all__ = ["SheetTable", "classify_sheets", "stack_tables"]
 

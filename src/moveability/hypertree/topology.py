@@ -20,8 +20,8 @@ import itertools
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import InvalidParameterError
 from ._kernels import label_leaves
-from .errors import InvalidParameterError
 from .status import IN, status_mask
 from .tree import HyperTree
 

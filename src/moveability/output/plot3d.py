@@ -4,7 +4,7 @@ With three pose axes the regions are solids. :func:`plot_slices` cuts them at
 chosen values of the third axis and draws the (x, y) slices;
 :func:`plot_regions_3d` draws the outer surface of each region's certified
 part, found by :func:`boundary_faces`. Colours and legends follow
-:mod:`moveability.plot`.
+:mod:`moveability.output.plot`.
 """
 
 from __future__ import annotations
@@ -15,17 +15,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InvalidParameterError
+from ..errors import InvalidParameterError
+from ..hypertree.status import BOUNDARY, OUT
+from ..hypertree.topology import adjacency
+from ..hypertree.tree import HyperTree, _to_coordinates
 from .plot import PALETTE, UNDECIDED, _cells, _figure_of, _frame, _panels, _pyplot, region_cells
-from .status import BOUNDARY, OUT
-from .topology import adjacency
-from .tree import HyperTree, _to_coordinates
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from .analysis import Analysis
+    from ..analysis.result import Analysis
 
 __all__ = ["DEFAULT_PHIS", "MAX_FACES", "boundary_faces", "plot_regions_3d", "plot_slices"]
 
@@ -80,7 +80,7 @@ def _in_slice(lo: Array, hi: Array, value: float, top: float) -> NDArray[np.bool
 
 def _outline(ax: Axes, result: Analysis, value: float) -> Any:
     """Outline of W (certain or undecided) in a slice, from a raster twice the finest grid."""
-    from .measurement import locate
+    from ..hypertree.measurement import locate
 
     tree = result.tree
     # the leaves' finest depth on each axis (the tree may allow deeper ones), at
@@ -220,7 +220,7 @@ def boundary_faces(
     Notes
     -----
     ``O(n k log n)`` for ``n`` leaves: one face-adjacency probe of the tree
-    (:func:`moveability.topology.adjacency`), then numpy on the pairs.
+    (:func:`moveability.hypertree.topology.adjacency`), then numpy on the pairs.
 
     Examples
     --------
