@@ -46,14 +46,14 @@ N_GRID = 500
 def _possible_label(result, row, leaf, posture, point):
     """Possible component of the sub-node holding the configuration of ``posture`` at
     ``point``: the piece of each limited joint's range its value lies in."""
-    from moveability.analysis.regions import _pieces, split_legs
+    from moveability.analysis.regions import joint_pieces, split_legs
 
     g, t, m = result.graph, result.table, result.mechanism
     q = m.joint_angles(point[None, :], clip=True)[0, posture]
     slot = 0
     for bit, i in enumerate(split_legs(m.limits)):
         lim = m.limits[i]
-        lo, hi, ok = _pieces(
+        lo, hi, ok = joint_pieces(
             t.angles_lo[leaf : leaf + 1, posture, i], t.angles_hi[leaf : leaf + 1, posture, i], lim
         )
         v = lim.wrap(q[i]) if not lim.periodic else q[i]

@@ -12,7 +12,9 @@ from .errors import (
     IncompatibleTreesError,
     InvalidParameterError,
     MoveabilityError,
+    PlanningError,
     ResolutionError,
+    SpecError,
 )
 from .hypertree.measurement import leaf_volumes, locate, measure
 from .hypertree.projection import project
@@ -37,8 +39,10 @@ __all__ = [
     "InvalidParameterError",
     "Leaves",
     "MoveabilityError",
+    "PlanningError",
     "Region",
     "ResolutionError",
+    "SpecError",
     "Status",
     "__version__",
     "adjacency",

@@ -11,7 +11,10 @@ __all__ = [
     "IncompatibleTreesError",
     "InvalidParameterError",
     "MoveabilityError",
+    "Plain",
+    "PlanningError",
     "ResolutionError",
+    "SpecError",
 ]
 
 
@@ -48,3 +51,32 @@ class IncompatibleTreesError(InvalidParameterError):
 
 class ResolutionError(InvalidParameterError):
     """The requested precision or depth would not fit in memory or in the keys."""
+
+
+class SpecError(InvalidParameterError):
+    """A specification is missing, malformed or has a value that is not allowed.
+
+    ``name`` is the key at fault as written in the file (``"parameters.L2"``,
+    ``"limits.theta1"``, ``"mechanism"``), or the file itself.
+    """
+
+
+class PlanningError(MoveabilityError):
+    """No certified motion joins the poses (they lie in no common region, or the
+    precision cannot tell)."""
+
+
+class Plain(str):
+    """Text shown as is (not quoted) in an error message: the ``received`` of an
+    :class:`InvalidParameterError` that is a description, not a value.
+
+    Examples
+    --------
+    >>> str(InvalidParameterError("path", "a file", Plain("a folder")))
+    'invalid path: expected a file, got a folder'
+    """
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return str.__str__(self)

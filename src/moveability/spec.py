@@ -38,7 +38,7 @@ import tomllib
 from collections.abc import Mapping, Sequence
 from typing import Any, NamedTuple
 
-from .errors import InvalidParameterError
+from .errors import Plain, SpecError
 
 __all__ = [
     "MECHANISMS",
@@ -57,14 +57,6 @@ UNLIMITED = "unlimited"
 _TWO_PI_MAX = math.nextafter(2.0 * math.pi, math.inf)
 
 _TOP_KEYS = ("mechanism", "parameters", "limits")
-
-
-class SpecError(InvalidParameterError):
-    """A specification is missing, malformed or has a value that is not allowed.
-
-    ``name`` is the key at fault as written in the file (``"parameters.L2"``,
-    ``"limits.theta1"``, ``"mechanism"``), or the file itself.
-    """
 
 
 class MechanismSchema(NamedTuple):
@@ -131,16 +123,7 @@ _OWN_FORMAT: dict[str, str] = {
 }
 
 
-class _Plain(str):
-    """Text shown as is (not quoted) in an error message."""
-
-    __slots__ = ()
-
-    def __repr__(self) -> str:
-        return str.__str__(self)
-
-
-_NOTHING = _Plain("nothing")
+_NOTHING = Plain("nothing")
 
 _NUMBER = r"(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?"
 _PLAIN_RE = re.compile(rf"\s*(?P<sign>[-+]?)\s*(?P<num>{_NUMBER})\s*")
@@ -304,7 +287,7 @@ def load_spec(source: str | os.PathLike[str] | Mapping[str, Any]) -> dict[str, A
     for key in data:
         if key not in _TOP_KEYS:
             raise SpecError(
-                str(key), "one of the keys " + ", ".join(map(repr, _TOP_KEYS)), _Plain(str(key))
+                str(key), "one of the keys " + ", ".join(map(repr, _TOP_KEYS)), Plain(str(key))
             )
     schema = MECHANISMS[name]
     return {
@@ -325,10 +308,10 @@ def _read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         reason = error.strerror or type(error).__name__
         raise SpecError("spec", f"a readable TOML file ({reason})", shown) from None
     except UnicodeDecodeError as error:
-        raise SpecError(f"spec {shown}", "UTF-8 text", _Plain(str(error))) from None
+        raise SpecError(f"spec {shown}", "UTF-8 text", Plain(str(error))) from None
     except tomllib.TOMLDecodeError as error:
         # tomllib's message ends with "(at line L, column C)"
-        raise SpecError(f"spec {shown}", "valid TOML", _Plain(str(error))) from None
+        raise SpecError(f"spec {shown}", "valid TOML", Plain(str(error))) from None
 
 
 def _mechanism(value: object) -> str:

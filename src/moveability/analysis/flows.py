@@ -588,14 +588,14 @@ def slot_spans(
 ) -> NDArray[np.float64]:
     """(m, slots, legs, 2): the range of values of each limited revolute joint in each
     slot of the nodes (see :func:`moveability.analysis.regions.split_legs`)."""
-    from .regions import _pieces
+    from .regions import joint_pieces
 
     split = split_legs(limits)
     slots = 1 << len(split)
     m = nodes.shape[0]
     spans = np.zeros((m, slots, len(split), 2))
     for j, i in enumerate(split):
-        lo, hi, _ = _pieces(
+        lo, hi, _ = joint_pieces(
             table.angles_lo[nodes[:, 0], nodes[:, 1], i],
             table.angles_hi[nodes[:, 0], nodes[:, 1], i],
             limits[i],

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order
 
-from ..errors import MoveabilityError
+from ..errors import PlanningError
 from ..hypertree.status import IN
 from ..mechanisms.base import REGULAR
 
@@ -31,11 +31,6 @@ if TYPE_CHECKING:
 __all__ = ["PlanningError", "plan_motion"]
 
 Array = NDArray[np.float64]
-
-
-class PlanningError(MoveabilityError):
-    """No certified motion joins the poses (they lie in no common region, or the
-    precision cannot tell)."""
 
 
 def _graph(analysis: Analysis) -> Any:

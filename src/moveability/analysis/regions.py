@@ -102,7 +102,7 @@ def _posture_pairs(postures: NDArray[np.int64]) -> list[tuple[int, int, NDArray[
     return out
 
 
-def _pieces(
+def joint_pieces(
     lo: NDArray[np.float64], hi: NDArray[np.float64], limit: JointLimit
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
     """Values in ``[limit.lo, limit.hi]`` of unwrapped angle enclosures, as two pieces.
@@ -208,7 +208,7 @@ def region_graph(
     split = split_legs(limits)
     slots = 1 << len(split)
     pieces = [
-        _pieces(table.angles_lo[:, :, i], table.angles_hi[:, :, i], limits[i])
+        joint_pieces(table.angles_lo[:, :, i], table.angles_hi[:, :, i], limits[i])
         for i in range(n_legs)
     ]  # per leg: (lo, hi, ok) arrays of shape (2, n, P)
     combos = [

@@ -64,10 +64,6 @@ RESOLVE_GROWTH = 2.0
 RESOLVE_ROUND = 1 << 13
 
 
-def _tri(value: bool | None) -> str:
-    return {True: "in", False: "out", None: "unknown"}[value]
-
-
 @dataclass(frozen=True)
 class Region:
     """A resolved region R_j and its projection W_Nj.
@@ -95,7 +91,7 @@ class Region:
     possible: int
 
 
-def _check_precision(precision: float | Sequence[float], k: int) -> NDArray[np.float64]:
+def check_precision(precision: float | Sequence[float], k: int) -> NDArray[np.float64]:
     """Per-axis precision from one number or one per pose axis."""
     allowed = f"a positive length, or {k} of them (one per pose axis)"
     try:
@@ -187,7 +183,7 @@ def analyze(
         from ..spec import load_spec
 
         mechanism = from_spec(load_spec(mechanism))
-    eps = _check_precision(precision, len(mechanism.pose_names))
+    eps = check_precision(precision, len(mechanism.pose_names))
     lo, hi = mechanism.pose_box()
     depths = _depths(lo, hi, eps)
     if isinstance(resolve_levels, bool) or not isinstance(resolve_levels, int | np.integer):
@@ -457,7 +453,7 @@ class Analysis:
         #: bounds on the count proved in the joint space (two-dyad mechanisms), if sought
         self.joint_count = joint_count
         #: per pose axis
-        self.precisions = _check_precision(precision, len(mechanism.pose_names))
+        self.precisions = check_precision(precision, len(mechanism.pose_names))
         #: as given: one number, or one per pose axis
         self.precision = _as_given(self.precisions)
         self.tree = tree

@@ -40,7 +40,7 @@ from ..intervals import Interval
 from ..limits import INSIDE, OUTSIDE, classify_angles
 from ..mechanisms import Mechanism
 from ..mechanisms.base import REACH_OUT, REGULAR
-from .result import _check_precision
+from .result import check_precision
 
 __all__ = ["WxQAnalysis", "WxQRegion", "analyze_wxq"]
 
@@ -150,7 +150,7 @@ def analyze_wxq(
     >>> sorted(r.sign for r in result.regions)
     [-1, 1]
     """
-    eps = float(_check_precision(precision, 1)[0])
+    eps = float(check_precision(precision, 1)[0])
     w_lo, w_hi = mechanism.bounds
     q_lo = np.array([lim.lo for lim in mechanism.limits])
     q_hi = np.array([lim.lo + 2 * np.pi if lim.periodic else lim.hi for lim in mechanism.limits])

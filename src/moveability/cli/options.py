@@ -22,7 +22,7 @@ import click
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InvalidParameterError, MoveabilityError
+from ..errors import InvalidParameterError, MoveabilityError, Plain
 from ..spec import load_spec
 
 __all__ = [
@@ -61,15 +61,6 @@ class InputError(click.ClickException):
 
     def __init__(self, message: str) -> None:
         super().__init__(" ".join(str(message).splitlines()))
-
-
-class _Plain(str):
-    """Text shown as is (not quoted) in an error message."""
-
-    __slots__ = ()
-
-    def __repr__(self) -> str:
-        return str.__str__(self)
 
 
 # ------------------------------------------------------------------ options
@@ -413,7 +404,7 @@ def parse_points(
     if not rows:
         got = "an empty file" if columns is None else "a header and no rows"
         raise InvalidParameterError(
-            name, f"CSV with the header {','.join(pose_names)} and one pose per row", _Plain(got)
+            name, f"CSV with the header {','.join(pose_names)} and one pose per row", Plain(got)
         )
     return np.array(rows, dtype=np.float64).reshape(-1, k)
 

@@ -62,7 +62,7 @@ def plan_command(
     each joint. Exits with status 3, saying which poses are apart, when no
     region is known to hold them all.
     """
-    from ..analysis.planning import PlanningError
+    from ..errors import PlanningError
 
     options.check_output(json_out, overwrite)
     with options.reporting_errors():

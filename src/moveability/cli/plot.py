@@ -89,7 +89,7 @@ def plot_command(
     precision: float,
 ) -> None:
     """Draw one figure of the analysis of the manipulator of SPEC."""
-    from ..analysis.planning import PlanningError
+    from ..errors import PlanningError
 
     ext = os.path.splitext(out)[1].lower()
     allowed = (".gif",) if animate else (".png", ".svg")
@@ -115,9 +115,9 @@ def plot_command(
 
         try:
             if animate:
-                from ..output.plot import _default_points
+                from ..output.plot import default_points
 
-                motion = result.plan(poses if poses is not None else _default_points(result))
+                motion = result.plan(poses if poses is not None else default_points(result))
                 animate_path(result, motion, out)
             else:
                 angles = np.radians(phis) if phis else None

@@ -7,7 +7,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 from .status import BOUNDARY, IN, OUT
-from .tree import HyperTree, _to_coordinates
+from .tree import HyperTree, to_coordinates
 
 __all__ = ["leaf_volumes", "locate", "measure"]
 
@@ -83,9 +83,9 @@ def locate(tree: HyperTree, points: ArrayLike) -> tuple[NDArray[np.uint8], NDArr
     guess = np.floor((q - lo) / (hi - lo) * res).astype(np.int64)
     guess = np.clip(guess, 0, res - 1)
     # correct rounding against the exact cell faces used everywhere else
-    below = _to_coordinates(lo, hi, layout, guess) > q
+    below = to_coordinates(lo, hi, layout, guess) > q
     guess = np.where(below, guess - 1, guess)
-    above = (_to_coordinates(lo, hi, layout, guess + 1) <= q) & (guess + 1 < res)
+    above = (to_coordinates(lo, hi, layout, guess + 1) <= q) & (guess + 1 < res)
     guess = np.clip(np.where(above, guess + 1, guess), 0, res - 1)
     keys = layout.encode(guess)
     index = np.full(p.shape[0], -1, dtype=np.intp)

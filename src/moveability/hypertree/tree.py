@@ -245,8 +245,8 @@ class HyperTree:
             keys: NDArray[np.uint64], anchors: NDArray[np.int64], level: int
         ) -> NDArray[np.uint8]:
             sizes = layout.cell_sizes(np.full(1, level))
-            cell_lo = _to_coordinates(lo_a, hi_a, layout, anchors)
-            cell_hi = _to_coordinates(lo_a, hi_a, layout, anchors + sizes)
+            cell_lo = to_coordinates(lo_a, hi_a, layout, anchors)
+            cell_hi = to_coordinates(lo_a, hi_a, layout, anchors + sizes)
             result = np.asarray(classify(cell_lo, cell_hi))
             if result.shape != (keys.size,) or result.dtype.kind not in "iub":
                 raise InvalidParameterError(
@@ -296,8 +296,8 @@ class HyperTree:
             self._layout, self._keys[split], self._levels[split], self.anchors[split]
         )
         sizes = self._layout.cell_sizes(levels)
-        cell_lo = _to_coordinates(self._lo, self._hi, self._layout, anchors)
-        cell_hi = _to_coordinates(self._lo, self._hi, self._layout, anchors + sizes)
+        cell_lo = to_coordinates(self._lo, self._hi, self._layout, anchors)
+        cell_hi = to_coordinates(self._lo, self._hi, self._layout, anchors + sizes)
         status = np.asarray(classify(cell_lo, cell_hi))
         if status.shape != (keys.size,) or not is_valid_status(status.astype(np.int64)).all():
             raise InvalidParameterError(
@@ -445,8 +445,8 @@ class HyperTree:
         ([[0.0], [0.5]], [[0.5], [1.0]], [1, 2])
         """
         sizes = self._layout.cell_sizes(self._levels)
-        lo = _to_coordinates(self._lo, self._hi, self._layout, self.anchors)
-        hi = _to_coordinates(self._lo, self._hi, self._layout, self.anchors + sizes)
+        lo = to_coordinates(self._lo, self._hi, self._layout, self.anchors)
+        hi = to_coordinates(self._lo, self._hi, self._layout, self.anchors + sizes)
         return Leaves(lo, hi, self._status, self._levels)
 
     def cell_widths(self) -> NDArray[np.float64]:
@@ -639,7 +639,7 @@ def _check_partition(tree: HyperTree, where: str) -> None:
         raise InvalidParameterError("path", "leaves tiling the box", where)
 
 
-def _to_coordinates(
+def to_coordinates(
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
     layout: KeyLayout,

@@ -64,9 +64,10 @@ import sympy
 from numpy.typing import NDArray
 
 from .. import intervals as iv
+from ..errors import Plain, SpecError
 from ..intervals import Interval
 from ..limits import JointLimit
-from ..spec import SpecError, parse_angle
+from ..spec import parse_angle
 from . import expressions as ex
 from .base import Mechanism
 from .constraint_leg import ConstraintLeg
@@ -133,7 +134,7 @@ def _parse(text: object, key: str, names: Mapping[str, sympy.Symbol]) -> sympy.E
             if node.id == "pi":
                 return sympy.pi
             raise SpecError(
-                key, _EXPRESSION_ALLOWED, _Plain(f"unknown symbol {node.id!r} in {key}")
+                key, _EXPRESSION_ALLOWED, Plain(f"unknown symbol {node.id!r} in {key}")
             )
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
             operand = build(node.operand)
@@ -151,38 +152,29 @@ def _parse(text: object, key: str, names: Mapping[str, sympy.Symbol]) -> sympy.E
             if isinstance(node.op, ast.Pow):
                 return left**right
             shown = "'^' (write powers as **)" if isinstance(node.op, ast.BitXor) else "operator"
-            raise SpecError(key, _EXPRESSION_ALLOWED, _Plain(f"unsupported {shown} in {key}"))
+            raise SpecError(key, _EXPRESSION_ALLOWED, Plain(f"unsupported {shown} in {key}"))
         if isinstance(node, ast.Call):
             func = node.func.id if isinstance(node.func, ast.Name) else None
             if func not in _FUNCTIONS:
                 shown = func if func is not None else ast.unparse(node.func)
                 raise SpecError(
-                    key, _EXPRESSION_ALLOWED, _Plain(f"unknown function {shown!r} in {key}")
+                    key, _EXPRESSION_ALLOWED, Plain(f"unknown function {shown!r} in {key}")
                 )
             if node.keywords or len(node.args) != _ARITY.get(func, 1):
                 raise SpecError(
                     key,
                     f"{func} with {_ARITY.get(func, 1)} argument(s)",
-                    _Plain(ast.unparse(node)),
+                    Plain(ast.unparse(node)),
                 )
             return _FUNCTIONS[func](*(build(a) for a in node.args))
         raise SpecError(
-            key, _EXPRESSION_ALLOWED, _Plain(f"unsupported {ast.unparse(node)!r} in {key}")
+            key, _EXPRESSION_ALLOWED, Plain(f"unsupported {ast.unparse(node)!r} in {key}")
         )
 
     expr = build(tree)
     if expr.has(sympy.zoo, sympy.nan, sympy.oo, -sympy.oo, sympy.I):
         raise SpecError(key, "a finite real expression", text)
     return expr
-
-
-class _Plain(str):
-    """Text shown as is in an error message."""
-
-    __slots__ = ()
-
-    def __repr__(self) -> str:
-        return str.__str__(self)
 
 
 # ------------------------------------------------------------------- printing
@@ -232,7 +224,7 @@ class _Printer:
         if isinstance(e, sympy.sign):
             # derivative of abs: d|u| = sign(u) du, undefined at 0 (guarded over intervals)
             return f"sign({self(e.args[0])})"
-        raise SpecError("expression", _EXPRESSION_ALLOWED, _Plain(str(e)))
+        raise SpecError("expression", _EXPRESSION_ALLOWED, Plain(str(e)))
 
 
 def _sign(x: Any) -> Any:
@@ -381,7 +373,7 @@ got unknown symbol 'z' in legs[0].constraint
         raise SpecError("spec", "a mapping", data)
     for key in data:
         if key not in _KEYS:
-            raise SpecError(str(key), "one of the keys " + ", ".join(_KEYS), _Plain(str(key)))
+            raise SpecError(str(key), "one of the keys " + ", ".join(_KEYS), Plain(str(key)))
     if data.get("mechanism", "custom") != "custom":
         raise SpecError("mechanism", "'custom'", data.get("mechanism"))
     pose = _names(data.get("pose"), "pose", set())
@@ -415,7 +407,7 @@ got unknown symbol 'z' in legs[0].constraint
         leg = _table(leg, key, "a table with joint and constraint")
         for k in leg:
             if k not in _LEG_KEYS:
-                raise SpecError(f"{key}.{k}", "one of " + ", ".join(_LEG_KEYS), _Plain(str(k)))
+                raise SpecError(f"{key}.{k}", "one of " + ", ".join(_LEG_KEYS), Plain(str(k)))
         joint = leg.get("joint")
         if joint not in joints:
             raise SpecError(f"{key}.joint", f"one of the joints {joints}", joint)
@@ -445,7 +437,7 @@ got unknown symbol 'z' in legs[0].constraint
         by_joint[joint] = entry
     for joint in joints:
         if joint not in by_joint:
-            raise SpecError("legs", f"a leg for joint {joint}", _Plain("nothing"))
+            raise SpecError("legs", f"a leg for joint {joint}", Plain("nothing"))
 
     limits_raw = _table(data.get("limits"), "limits", "a table giving each joint's limits")
     limits: dict[str, Any] = {}
@@ -455,7 +447,7 @@ got unknown symbol 'z' in legs[0].constraint
     for joint in joints:
         key = f"limits.{joint}"
         if joint not in limits_raw:
-            raise SpecError(key, '[lo, hi] or "unlimited"', _Plain("nothing"))
+            raise SpecError(key, '[lo, hi] or "unlimited"', Plain("nothing"))
         value = limits_raw[joint]
         prismatic = by_joint[joint]["kind"] == "prismatic"
         if isinstance(value, str):
@@ -477,7 +469,7 @@ got unknown symbol 'z' in legs[0].constraint
     for name in pose:
         key = f"bounds.{name}"
         if name not in bounds_raw:
-            raise SpecError(key, "[lo, hi]", _Plain("nothing"))
+            raise SpecError(key, "[lo, hi]", Plain("nothing"))
         pair = _pair(bounds_raw[name], key, angle=True)
         if name in periodic and not (_TWO_PI_LO <= pair[1] - pair[0] <= _TWO_PI_HI):
             raise SpecError(key, "one full turn (hi - lo = 2*pi) for a periodic coordinate", pair)

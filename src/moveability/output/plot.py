@@ -49,7 +49,9 @@ FIGURES_3D = ("slices", "regions-3d")
 Array = NDArray[np.float64]
 
 
-def _pyplot() -> Any:
+def pyplot() -> Any:
+    """matplotlib's pyplot, imported when a figure is first drawn (the Agg backend
+    unless one was chosen)."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -58,28 +60,30 @@ def _pyplot() -> Any:
     return plt
 
 
-def _figure_of(ax: Axes) -> Figure:
+def figure_of(ax: Axes) -> Figure:
+    """The figure that holds ``ax``."""
     return cast("Figure", ax.figure)
 
 
-def _panels(n: int, max_cols: int, size: float) -> list[Axes]:
+def panels(n: int, max_cols: int, size: float) -> list[Axes]:
     """A grid of ``n`` panels (at most ``max_cols`` per row), as a flat list of axes."""
     cols = min(n, max_cols)
     rows = int(np.ceil(n / cols))
-    _, grid = _pyplot().subplots(rows, cols, figsize=(size * cols, size * rows), squeeze=False)
+    _, grid = pyplot().subplots(rows, cols, figsize=(size * cols, size * rows), squeeze=False)
     return list(grid.ravel())
 
 
 def _axes(ax: Axes | None, **kwargs: Any) -> tuple[Figure, Axes]:
     if ax is not None:
         return ax.figure, ax  # type: ignore[return-value]
-    fig, ax = _pyplot().subplots(**kwargs)
+    fig, ax = pyplot().subplots(**kwargs)
     return fig, ax
 
 
-def _cells(
+def draw_cells(
     ax: Axes, lo: Array, hi: Array, color: Any, label: str | None = None, alpha: float = 1.0
 ) -> Any:
+    """Fill the boxes ``[lo, hi]`` (first two axes) as one collection; returns it."""
     from matplotlib.collections import PolyCollection
 
     verts = np.stack([lo, np.c_[hi[:, 0], lo[:, 1]], hi, np.c_[lo[:, 0], hi[:, 1]]], axis=1)
@@ -90,7 +94,8 @@ def _cells(
     return coll
 
 
-def _frame(ax: Axes, mechanism: Mechanism, title: str) -> None:
+def frame_axes(ax: Axes, mechanism: Mechanism, title: str) -> None:
+    """Limits of the pose box, equal aspect, labelled pose axes and a title."""
     lo, hi = mechanism.bounds
     names = mechanism.pose_names
     ax.set_xlim(lo[0], hi[0])
@@ -122,9 +127,9 @@ def plot_workspace(result: Analysis, ax: Axes | None = None) -> Figure:
     t = result.table
     certain = (t.exists & t.within).any(axis=1)
     possible = (t.status != OUT).any(axis=1)
-    _cells(ax, leaves.lo[certain], leaves.hi[certain], "#DDEEFF", label="W (certain)")
+    draw_cells(ax, leaves.lo[certain], leaves.hi[certain], "#DDEEFF", label="W (certain)")
     undecided = possible & ~certain
-    _cells(
+    draw_cells(
         ax,
         leaves.lo[undecided],
         leaves.hi[undecided],
@@ -175,7 +180,7 @@ def plot_workspace(result: Analysis, ax: Axes | None = None) -> Figure:
         *handles,
     ]
     ax.legend(handles=handles, loc="upper right", fontsize=7)
-    _frame(ax, m, f"Workspace W and singularity loci (precision {result.precision_text})")
+    frame_axes(ax, m, f"Workspace W and singularity loci (precision {result.precision_text})")
     return fig
 
 
@@ -221,8 +226,8 @@ def plot_postures(
     q = mechanism.joint_angles(p)[0]
     n = q.shape[0]
     if axes is None:
-        axes = _panels(n, 4, 4)
-    fig = _figure_of(axes[0])
+        axes = panels(n, 4, 4)
+    fig = figure_of(axes[0])
     scale = float(np.abs(np.concatenate(mechanism.bounds)).max())
     for k in range(n):
         ax = axes[k]
@@ -247,7 +252,7 @@ def plot_postures(
         if state:
             title += " [" + ", ".join(state) + "]"
         ax.set_title(title, fontsize=8)
-        _frame(ax, mechanism, ax.get_title())
+        frame_axes(ax, mechanism, ax.get_title())
         ax.set_title(title, fontsize=8)
     for ax in axes[n:]:
         ax.set_axis_off()
@@ -300,8 +305,8 @@ def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure
     regions = result.regions
     n = len(regions) + 1
     if axes is None:
-        axes = _panels(n, 3, 5.5)
-    fig = _figure_of(axes[0])
+        axes = panels(n, 3, 5.5)
+    fig = figure_of(axes[0])
     leaves = result.tree.leaves()
     overlay = axes[len(regions)]
     from matplotlib.patches import Patch
@@ -311,8 +316,8 @@ def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure
         color = PALETTE[j % len(PALETTE)]
         sure, maybe = region_cells(result, j)
         ax = axes[j]
-        _cells(ax, leaves.lo[sure], leaves.hi[sure], color)
-        _cells(ax, leaves.lo[maybe], leaves.hi[maybe], color, alpha=0.3)
+        draw_cells(ax, leaves.lo[sure], leaves.hi[sure], color)
+        draw_cells(ax, leaves.lo[maybe], leaves.hi[maybe], color, alpha=0.3)
         label = (
             f"W_N{region.id}: area in [{region.area[0]:.3f}, {region.area[1]:.3f}], "
             f"det A {'>' if region.sign > 0 else '<'} 0"
@@ -326,11 +331,11 @@ def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure
             loc="upper right",
             fontsize=7,
         )
-        _frame(ax, result.mechanism, f"N-connected region {region.id}")
-        _cells(overlay, leaves.lo[sure], leaves.hi[sure], color, alpha=0.45)
+        frame_axes(ax, result.mechanism, f"N-connected region {region.id}")
+        draw_cells(overlay, leaves.lo[sure], leaves.hi[sure], color, alpha=0.45)
         overlay_handles.append(Patch(color=color, alpha=0.45, label=label))
     overlay.legend(handles=overlay_handles, loc="upper right", fontsize=7)
-    _frame(overlay, result.mechanism, "All N-connected regions")
+    frame_axes(overlay, result.mechanism, "All N-connected regions")
     for ax in axes[n:]:
         ax.set_axis_off()
     fig.suptitle(f"N-connected regions (precision {result.precision_text})")
@@ -422,8 +427,8 @@ def plot_path(
     path = motion["path"]
     frames = _frames(motion, count)
     if axes is None:
-        axes = _panels(len(frames), 3, 4.5)
-    fig = _figure_of(axes[0])
+        axes = panels(len(frames), 3, 4.5)
+    fig = figure_of(axes[0])
     poses = np.array([c["pose"] for c in path])
     letters = "abcdefghijklmnopqrstuvwxyz"
     for n, k in enumerate(frames):
@@ -440,7 +445,7 @@ def plot_path(
         title = f"({letters[n % 26]}) step {k}, posture {posture}"
         if changed:
             title += "  <- posture change"
-        _frame(ax, m, title)
+        frame_axes(ax, m, title)
     for ax in axes[len(frames) :]:
         ax.set_axis_off()
     fig.suptitle(f"Motion in region {motion['region']}: {len(path)} configurations")
@@ -449,7 +454,7 @@ def plot_path(
 
 def animate_path(result: Analysis, motion: dict[str, Any], out: str, fps: int = 20) -> None:
     """Write a GIF of a planned motion."""
-    plt = _pyplot()
+    plt = pyplot()
     from matplotlib.animation import FuncAnimation, PillowWriter
 
     m = result.mechanism
@@ -467,7 +472,7 @@ def animate_path(result: Analysis, motion: dict[str, Any], out: str, fps: int = 
         artists = _draw_mechanism(
             ax, m, np.array(conf["pose"]), np.array(conf["joints"]), PALETTE[index % len(PALETTE)]
         )
-        _frame(ax, m, f"step {k}, posture {conf['posture']}")
+        frame_axes(ax, m, f"step {k}, posture {conf['posture']}")
         return artists
 
     anim = FuncAnimation(fig, draw, frames=len(keep), blit=False)
@@ -535,7 +540,7 @@ def figure(
     if name == "joint-space":
         return plot_joint_space(result)
     if points is None:
-        points = _default_points(result)
+        points = default_points(result)
     return plot_path(result, result.plan(points))
 
 
@@ -548,7 +553,7 @@ def _default_pose(result: Analysis) -> Array:
     return 0.5 * (leaves.lo[best] + leaves.hi[best])
 
 
-def _default_points(result: Analysis) -> Array:
+def default_points(result: Analysis) -> Array:
     """Two far-apart poses certainly in the largest region."""
     index = max(range(len(result.regions)), key=lambda j: result.regions[j].area[0])
     leaves = result.tree.leaves()

@@ -18,8 +18,17 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InvalidParameterError
 from ..hypertree.status import BOUNDARY, OUT
 from ..hypertree.topology import adjacency
-from ..hypertree.tree import HyperTree, _to_coordinates
-from .plot import PALETTE, UNDECIDED, _cells, _figure_of, _frame, _panels, _pyplot, region_cells
+from ..hypertree.tree import HyperTree, to_coordinates
+from .plot import (
+    PALETTE,
+    UNDECIDED,
+    draw_cells,
+    figure_of,
+    frame_axes,
+    panels,
+    pyplot,
+    region_cells,
+)
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -137,10 +146,10 @@ def plot_slices(
     if values.ndim != 1 or values.size == 0 or not np.isfinite(values).all():
         raise InvalidParameterError("phis", "one or more finite angles (radians)", phis)
     if axes is None:
-        axes = _panels(values.size, 2, 6.0)
+        axes = panels(values.size, 2, 6.0)
     if len(axes) < values.size:
         raise InvalidParameterError("axes", f"at least {values.size} axes", len(axes))
-    fig = _figure_of(axes[0])
+    fig = figure_of(axes[0])
     leaves = result.tree.leaves()
     lo, hi = leaves.lo, leaves.hi
     top = float(result.tree.hi[2])
@@ -157,19 +166,19 @@ def plot_slices(
         value = _wrap(result, float(asked))
         cut = _in_slice(lo, hi, value, top)
         grey = cut & undecided
-        coll = _cells(ax, lo[grey, :2], hi[grey, :2], UNDECIDED)
+        coll = draw_cells(ax, lo[grey, :2], hi[grey, :2], UNDECIDED)
         coll.set_gid("undecided")
         for j, (certain, possible) in enumerate(masks):
             color = PALETTE[j % len(PALETTE)]
             rid = result.regions[j].id
             light = cut & possible
-            coll = _cells(ax, lo[light, :2], hi[light, :2], color, alpha=0.3)
+            coll = draw_cells(ax, lo[light, :2], hi[light, :2], color, alpha=0.3)
             coll.set_gid(f"region {rid} possible")
             solid = cut & certain
-            coll = _cells(ax, lo[solid, :2], hi[solid, :2], color)
+            coll = draw_cells(ax, lo[solid, :2], hi[solid, :2], color)
             coll.set_gid(f"region {rid} certain")
         _outline(ax, result, value)
-        _frame(ax, m, _angle_text(m, 2, value))
+        frame_axes(ax, m, _angle_text(m, 2, value))
     for ax in axes[values.size :]:
         ax.set_axis_off()
     handles: list[Any] = [
@@ -284,8 +293,8 @@ def boundary_faces(
     ints_lo = np.concatenate(lo_parts) if lo_parts else np.zeros((0, k), dtype=np.int64)
     ints_hi = np.concatenate(hi_parts) if hi_parts else np.zeros((0, k), dtype=np.int64)
     return (
-        _to_coordinates(tree.lo, tree.hi, tree.layout, ints_lo),
-        _to_coordinates(tree.lo, tree.hi, tree.layout, ints_hi),
+        to_coordinates(tree.lo, tree.hi, tree.layout, ints_lo),
+        to_coordinates(tree.lo, tree.hi, tree.layout, ints_hi),
         np.concatenate(axis_parts) if axis_parts else np.zeros(0, dtype=np.intp),
         np.concatenate(side_parts) if side_parts else np.zeros(0, dtype=np.int8),
     )
@@ -338,8 +347,8 @@ def plot_regions_3d(result: Analysis, ax: Axes | None = None, max_faces: int = M
     # 3-D axes: their z methods are not in the Axes annotations
     view: Any = ax
     if view is None:
-        view = _pyplot().figure(figsize=(8, 7)).add_subplot(projection="3d")
-    fig = _figure_of(view)
+        view = pyplot().figure(figsize=(8, 7)).add_subplot(projection="3d")
+    fig = figure_of(view)
     faces = []
     for j in range(len(result.regions)):
         lo, hi, axis, _ = boundary_faces(result.tree, region_cells(result, j)[0])

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
 from ..hypertree.status import BOUNDARY
-from ..hypertree.tree import HyperTree, _to_coordinates
+from ..hypertree.tree import HyperTree, to_coordinates
 
 if TYPE_CHECKING:
     from ..analysis.result import Analysis
@@ -56,7 +56,7 @@ def _corners(
     ints = anchors[:, None, :] + bits[None, :, :] * sizes[:, None, :]  # (n, 2^k, k)
     unique, inverse = np.unique(ints.reshape(-1, k), axis=0, return_inverse=True)
     points = np.zeros((unique.shape[0], 3))
-    points[:, :k] = _to_coordinates(tree.lo, tree.hi, tree.layout, unique)
+    points[:, :k] = to_coordinates(tree.lo, tree.hi, tree.layout, unique)
     return points, inverse.reshape(cells.size, 1 << k).astype(np.int64)
 
 

@@ -17,8 +17,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..errors import InvalidParameterError
-from ..spec import UNLIMITED, SpecError, load_spec, parse_angle
+from ..errors import InvalidParameterError, SpecError
+from ..spec import UNLIMITED, load_spec, parse_angle
 
 __all__ = [
     "LIMIT_ENDS",

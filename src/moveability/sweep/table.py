@@ -25,7 +25,7 @@ import os
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, Plain
 
 __all__ = [
     "RESULT_COLUMNS",
@@ -134,15 +134,6 @@ def _key(row: Mapping[str, Any], names: Sequence[str]) -> Key:
     return tuple(float(row[name]) for name in names)
 
 
-class _Plain(str):
-    """Text shown as is (not quoted) in an error message."""
-
-    __slots__ = ()
-
-    def __repr__(self) -> str:
-        return str.__str__(self)
-
-
 def _sweep_of(columns: Sequence[str]) -> str:
     if tuple(columns[-len(RESULT_COLUMNS) :]) == RESULT_COLUMNS:
         varied = ",".join(columns[: -len(RESULT_COLUMNS)])
@@ -156,7 +147,7 @@ def _other_table(
     return InvalidParameterError(
         f"{name} {path}",
         _sweep_of(columns) + " (this sweep's), or a new file",
-        _Plain(_sweep_of(header)),
+        Plain(_sweep_of(header)),
     )
 
 
