@@ -172,7 +172,7 @@ def parse_angle(value: object, name: str = "angle") -> float:
     >>> parse_angle("pi/2 + 1", name="limits.theta1[1]")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
         ...
-    moveability.spec.SpecError: invalid limits.theta1[1]: expected ..., got 'pi/2 + 1'
+    moveability.errors.SpecError: invalid limits.theta1[1]: expected ..., got 'pi/2 + 1'
     """
     if _is_number(value):
         angle = float(value)  # type: ignore[arg-type]
@@ -270,7 +270,7 @@ def load_spec(source: str | os.PathLike[str] | Mapping[str, Any]) -> dict[str, A
     >>> load_spec({"mechanism": "five-bar", "parameters": {"L0": 7, "L1": 8, "L2": -5}})
     Traceback (most recent call last):
         ...
-    moveability.spec.SpecError: invalid parameters.L2: expected a positive finite length, got -5
+    moveability.errors.SpecError: invalid parameters.L2: expected a positive finite length, got -5
     """
     if isinstance(source, Mapping):
         data: Mapping[str, Any] = source

@@ -841,7 +841,7 @@ class Analysis:
         Consecutive configurations are at most ``step`` (default: the precision)
         apart in pose and in each joint; every configuration satisfies the
         constraints, keeps the region's sign of det A and respects the limits.
-        Raises :class:`moveability.analysis.planning.PlanningError` (exit 3 in the CLI)
+        Raises :class:`moveability.errors.PlanningError` (exit 3 in the CLI)
         when no region is known to hold every pose.
 
         Examples

@@ -365,7 +365,7 @@ def normalise_custom_spec(data: Mapping[str, Any]) -> dict[str, Any]:
     >>> normalise_custom_spec({**spec, "legs": [{"joint": "q", "constraint": "x - z*cos(q)"}]})
     Traceback (most recent call last):
         ...
-    moveability.spec.SpecError: invalid legs[0].constraint: expected an expression of \
+    moveability.errors.SpecError: invalid legs[0].constraint: expected an expression of \
 the declared names, numbers, pi, + - * / ** and abs, atan2, cos, exp, log, sin, sqrt, tan, \
 got unknown symbol 'z' in legs[0].constraint
     """

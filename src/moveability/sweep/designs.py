@@ -4,7 +4,7 @@ A *varied name* is a parameter of the spec's mechanism (``L1``) or an end of a
 joint's limit (``theta1.min``, ``theta1.max``). A *design* is the spec with the
 varied values substituted, checked again by :func:`moveability.spec.load_spec`:
 a design that is not a valid spec (a negative length, ``lo >= hi``) raises a
-:class:`~moveability.spec.SpecError` when applied, which the sweep records as
+:class:`~moveability.errors.SpecError` when applied, which the sweep records as
 that design's error.
 """
 
@@ -203,7 +203,7 @@ def apply_design(
 
     Raises
     ------
-    moveability.spec.SpecError
+    moveability.errors.SpecError
         When the design is not a valid spec; the message names the key.
 
     Examples
@@ -216,7 +216,7 @@ def apply_design(
     >>> apply_design(spec, ["theta1.max"], [-2.0])  # doctest: +ELLIPSIS
     Traceback (most recent call last):
         ...
-    moveability.spec.SpecError: invalid limits.theta1: expected [lo, hi] with lo < hi ...
+    moveability.errors.SpecError: invalid limits.theta1: expected [lo, hi] with lo < hi ...
     """
     parameters = dict(spec["parameters"])
     limits: dict[str, Any] = {
