@@ -18,12 +18,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order
 
 from ..errors import PlanningError
+from ..hypertree.measurement import locate
 from ..hypertree.status import IN
 from ..mechanisms.base import REGULAR
+from .sheets import classify_sheets
 
 if TYPE_CHECKING:
     from .result import Analysis
@@ -33,23 +34,12 @@ __all__ = ["PlanningError", "plan_motion"]
 Array = NDArray[np.float64]
 
 
-def _graph(analysis: Analysis) -> Any:
-    cached = getattr(analysis, "_planning_graph", None)
-    if cached is None:
-        n = analysis.graph.certain.size
-        e = analysis.graph.certain_edges
-        cached = coo_matrix(
-            (np.ones(e.shape[0], dtype=np.int8), (e[:, 0], e[:, 1])), shape=(n, n)
-        ).tocsr()
-        analysis._planning_graph = cached  # type: ignore[attr-defined]
-    return cached
-
-
 def _start_nodes(analysis: Analysis, point: Array, leaf: int, component: int) -> list[int]:
     """Certified nodes of ``component`` over ``leaf`` holding a configuration of ``point``."""
     t, g = analysis.table, analysis.graph
     n_post = t.status.shape[1]
-    point_table = analysis._point_table(point[None, :])
+    # the sheet certificates at the pose itself (a degenerate box)
+    point_table = classify_sheets(analysis.mechanism, point[None, :], point[None, :])
     regular_here = bool((point_table.leg_status[0] == REGULAR).all())
     nodes = []
     for p in range(n_post):
@@ -64,7 +54,7 @@ def _start_nodes(analysis: Analysis, point: Array, leaf: int, component: int) ->
 
 def _route(analysis: Analysis, start: int, goal: int) -> list[int]:
     _order, pred = breadth_first_order(
-        _graph(analysis), start, directed=False, return_predecessors=True
+        analysis.graph.certain_matrix, start, directed=False, return_predecessors=True
     )
     if pred[goal] < 0 and goal != start:
         raise PlanningError("the certified part of the region does not join the poses")
@@ -214,7 +204,7 @@ def plan_motion(analysis: Analysis, points: Array, step: float | None = None) ->
     region = analysis.regions[answer["region"]]
     step = float(analysis.precisions.min()) if step is None else float(step)
     p = np.asarray(points, dtype=np.float64).reshape(-1, len(analysis.mechanism.pose_names))
-    _, leaf = analysis._locate_leaves(p)
+    _, leaf = locate(analysis.tree, p)
     component = region.certain
     current = _start_nodes(analysis, p[0], int(leaf[0]), component)[0]
     poses = [p[0][None, :]]

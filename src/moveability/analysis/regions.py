@@ -21,10 +21,11 @@ region: the certain part is in it, and nothing outside the possible part is.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse import coo_matrix
+from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ..hypertree.status import IN
@@ -67,6 +68,16 @@ class RegionGraph:
     certain_edges: NDArray[np.int64]
     #: sub-nodes per node in ``possible`` (one per piece of the joint ranges)
     slots: int
+
+    @cached_property
+    def certain_matrix(self) -> csr_matrix:
+        """The certain graph as a sparse adjacency matrix over the nodes
+        (``leaf * P + posture``), built once, for walks along it (planning)."""
+        n = self.certain.size
+        e = self.certain_edges
+        return coo_matrix(
+            (np.ones(e.shape[0], dtype=np.int8), (e[:, 0], e[:, 1])), shape=(n, n)
+        ).tocsr()
 
 
 def _components(

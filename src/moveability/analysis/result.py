@@ -828,13 +828,6 @@ class Analysis:
             raise InvalidParameterError(f"points[{i}]", "finite coordinates", p[i].tolist())
         return self.mechanism.wrap_poses(p)
 
-    def _point_table(self, p: NDArray[np.float64]) -> SheetTable:
-        """Sheet certificates at the points themselves (degenerate boxes)."""
-        return classify_sheets(self.mechanism, p, p)
-
-    def _locate_leaves(self, p: NDArray[np.float64]) -> tuple[NDArray[np.uint8], NDArray[np.intp]]:
-        return locate(self.tree, p)
-
     def plan(self, points: ArrayLike, step: float | None = None) -> dict[str, Any]:
         """A continuous motion through the poses in order, inside one region.
 
