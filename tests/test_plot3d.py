@@ -14,8 +14,9 @@ from moveability.cli import main
 from moveability.errors import InvalidParameterError
 from moveability.hypertree.measurement import locate
 from moveability.hypertree.status import BOUNDARY
-from moveability.output.plot import figure, region_cells
-from moveability.output.plot3d import boundary_faces, plot_regions_3d, plot_slices
+from moveability.hypertree.topology import boundary_faces
+from moveability.output.plot import figure
+from moveability.output.plot3d import plot_regions_3d, plot_slices
 
 SPEC = "examples/three-rpr.toml"
 PRECISION = (2.0, 2.0, 0.4)
@@ -46,7 +47,7 @@ def _certain_phis(result):
     leaves = result.tree.leaves()
     phis = []
     for j in range(len(result.regions)):
-        i = int(np.flatnonzero(region_cells(result, j)[0])[0])
+        i = int(np.flatnonzero(result.region_cells(j)[0])[0])
         phis.append(0.5 * (leaves.lo[i, 2] + leaves.hi[i, 2]))
     return np.array([*phis, -3.0])
 
@@ -55,7 +56,7 @@ def test_slices_draw_the_leaves_of_the_cut_with_their_certificates(result):
     phis = _certain_phis(result)
     fig = plot_slices(result, phis=phis)
     leaves = result.tree.leaves()
-    masks = [region_cells(result, j) for j in range(len(result.regions))]
+    masks = [result.region_cells(j) for j in range(len(result.regions))]
     ids = [r.id for r in result.regions]
     drawn_certain = 0
     shown = [ax for ax in fig.axes if ax.axison]
@@ -128,7 +129,7 @@ def test_3d_faces_lie_on_the_boundary_of_each_region(result):
     assert len(drawn) == len(result.regions)
     widths = result.tree.hi - result.tree.lo
     for j, coll in enumerate(drawn):
-        certain = region_cells(result, j)[0]
+        certain = result.region_cells(j)[0]
         lo, hi, axis, side = boundary_faces(result.tree, certain)
         faces = getattr(coll, "_faces", None)
         if faces is not None:  # the polygons drawn are the faces found
@@ -170,7 +171,7 @@ def _surface_by_raster(tree, mask):
 def test_3d_faces_cover_the_surface(result):
     """Differential: the faces' area equals the surface counted on the finest grid."""
     for j in range(len(result.regions)):
-        certain = region_cells(result, j)[0]
+        certain = result.region_cells(j)[0]
         lo, hi, axis, _ = boundary_faces(result.tree, certain)
         spans = hi - lo
         spans[np.arange(axis.size), axis] = 1.0

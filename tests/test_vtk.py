@@ -10,7 +10,6 @@ from click.testing import CliRunner
 from moveability import analyze, load_spec
 from moveability.cli import main
 from moveability.hypertree.measurement import locate
-from moveability.output.plot import region_cells
 from moveability.output.vtk import VTK_HEXAHEDRON, VTK_QUAD, export_vtk
 
 SPEC = "examples/three-rpr.toml"
@@ -51,7 +50,7 @@ def _check_region_files(result, paths, cell_type, corners):
     for j, region in enumerate(result.regions):
         assert paths[j].name == f"region-{region.id}.vtu"
         points, cells, types, data = read_vtu(paths[j])
-        certain, possible = region_cells(result, j)
+        certain, possible = result.region_cells(j)
         assert len(cells) == int((certain | possible).sum())
         assert (types == cell_type).all() and all(c.size == corners for c in cells)
         boxes = np.array([points[c] for c in cells])  # (n, corners, 3)

@@ -743,6 +743,40 @@ class Analysis:
         at_least, at_most = self.count
         return at_least if at_least == at_most else None
 
+    def region_cells(self, index: int) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """Leaves certainly in a region, and leaves where it may extend besides.
+
+        A leaf is *certain* when one of its posture sheets is IN and belongs to the
+        region's certified component (their volumes sum to the region's inner
+        bound); it is *possible* when, not certain, one of its sheets touches the
+        region's possible component (certain and possible volumes sum to the outer
+        bound).
+
+        Parameters
+        ----------
+        index : int
+            Position of the region in :attr:`regions`.
+
+        Returns
+        -------
+        certain, possible : ndarray of bool, shape (n_leaves,)
+            Disjoint masks over ``self.tree.leaves()``.
+
+        Examples
+        --------
+        >>> from moveability import analyze
+        >>> from moveability.mechanisms import FiveBar
+        >>> result = analyze(FiveBar(7, 8, 5, 8, 5), precision=0.5)
+        >>> certain, possible = result.region_cells(0)
+        >>> bool(abs(result.areas[certain].sum() - result.regions[0].area[0]) < 1e-9)
+        True
+        """
+        c, row, u = self._region_nodes[index]
+        g, t = self.graph, self.table
+        certain = ((g.certain == c) & (t.status == IN)).any(axis=1)
+        possible = (g.possible[row] == u).any(axis=1) & ~certain
+        return certain, possible
+
     @property
     def measure_name(self) -> str:
         """What the measures of sets of poses are: ``area`` (2 pose axes), ``volume`` (3)."""

@@ -61,14 +61,13 @@ def export_command(
         mechanism = options.load_mechanism(spec)
         result = options.run_analysis(mechanism, precision, options.progress_reporter())
         from ..hypertree.status import BOUNDARY
-        from ..output.plot import region_cells
         from ..output.vtk import export_vtk
 
         paths = export_vtk(result, out)
         measure = result.measure_name
         files: list[dict[str, Any]] = []
         for j, region in enumerate(result.regions):
-            certain, possible = region_cells(result, j)
+            certain, possible = result.region_cells(j)
             files.append(
                 {
                     "path": str(paths[j]),

@@ -9,12 +9,13 @@ in the units of the mechanism's spec, angles in radians.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..hypertree.status import IN, OUT
+from .axes import PALETTE, UNDECIDED, draw_cells, figure_of, frame_axes, panels, pyplot
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -35,12 +36,8 @@ __all__ = [
     "plot_postures",
     "plot_regions",
     "plot_workspace",
-    "region_cells",
 ]
 
-#: Okabe-Ito colours
-PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000")
-UNDECIDED = "#BBBBBB"
 #: figures of mechanisms with two pose axes
 FIGURES = ("workspace", "postures", "regions", "joint-space", "path")
 #: figures of mechanisms with three pose axes (see :mod:`moveability.output.plot3d`)
@@ -49,61 +46,11 @@ FIGURES_3D = ("slices", "regions-3d")
 Array = NDArray[np.float64]
 
 
-def pyplot() -> Any:
-    """matplotlib's pyplot, imported when a figure is first drawn (the Agg backend
-    unless one was chosen)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def figure_of(ax: Axes) -> Figure:
-    """The figure that holds ``ax``."""
-    return cast("Figure", ax.figure)
-
-
-def panels(n: int, max_cols: int, size: float) -> list[Axes]:
-    """A grid of ``n`` panels (at most ``max_cols`` per row), as a flat list of axes."""
-    cols = min(n, max_cols)
-    rows = int(np.ceil(n / cols))
-    _, grid = pyplot().subplots(rows, cols, figsize=(size * cols, size * rows), squeeze=False)
-    return list(grid.ravel())
-
-
 def _axes(ax: Axes | None, **kwargs: Any) -> tuple[Figure, Axes]:
     if ax is not None:
         return ax.figure, ax  # type: ignore[return-value]
     fig, ax = pyplot().subplots(**kwargs)
     return fig, ax
-
-
-def draw_cells(
-    ax: Axes, lo: Array, hi: Array, color: Any, label: str | None = None, alpha: float = 1.0
-) -> Any:
-    """Fill the boxes ``[lo, hi]`` (first two axes) as one collection; returns it."""
-    from matplotlib.collections import PolyCollection
-
-    verts = np.stack([lo, np.c_[hi[:, 0], lo[:, 1]], hi, np.c_[lo[:, 0], hi[:, 1]]], axis=1)
-    coll = PolyCollection(
-        list(verts), facecolors=color, edgecolors="none", alpha=alpha, label=label
-    )
-    ax.add_collection(coll)
-    return coll
-
-
-def frame_axes(ax: Axes, mechanism: Mechanism, title: str) -> None:
-    """Limits of the pose box, equal aspect, labelled pose axes and a title."""
-    lo, hi = mechanism.bounds
-    names = mechanism.pose_names
-    ax.set_xlim(lo[0], hi[0])
-    ax.set_ylim(lo[1], hi[1])
-    ax.set_aspect("equal")
-    ax.set_xlabel(f"{names[0]} (length units)")
-    ax.set_ylabel(f"{names[1]} (length units)")
-    ax.set_title(title)
 
 
 def _grid(mechanism: Mechanism, n: int = 400) -> tuple[Array, Array, Array]:
@@ -261,42 +208,6 @@ def plot_postures(
 
 
 # ------------------------------------------------------------------ regions
-def region_cells(result: Analysis, index: int) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-    """Leaves certainly in a region, and leaves where it may extend besides.
-
-    A leaf is *certain* when one of its posture sheets is IN and belongs to the
-    region's certified component (their volumes sum to the region's inner
-    bound); it is *possible* when, not certain, one of its sheets touches the
-    region's possible component (certain and possible volumes sum to the outer
-    bound).
-
-    Parameters
-    ----------
-    result : Analysis
-    index : int
-        Position of the region in ``result.regions``.
-
-    Returns
-    -------
-    certain, possible : ndarray of bool, shape (n_leaves,)
-        Disjoint masks over ``result.tree.leaves()``.
-
-    Examples
-    --------
-    >>> from moveability import analyze
-    >>> from moveability.mechanisms import FiveBar
-    >>> result = analyze(FiveBar(7, 8, 5, 8, 5), precision=0.5)
-    >>> certain, possible = region_cells(result, 0)
-    >>> bool(abs(result.areas[certain].sum() - result.regions[0].area[0]) < 1e-9)
-    True
-    """
-    c, row, u = result._region_nodes[index]
-    g, t = result.graph, result.table
-    certain = ((g.certain == c) & (t.status == IN)).any(axis=1)
-    possible = (g.possible[row] == u).any(axis=1) & ~certain
-    return certain, possible
-
-
 def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure:
     """Each N-connected region W_Nj (one panel each) and an overlay.
 
@@ -314,7 +225,7 @@ def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure
     overlay_handles = []
     for j, region in enumerate(regions):
         color = PALETTE[j % len(PALETTE)]
-        sure, maybe = region_cells(result, j)
+        sure, maybe = result.region_cells(j)
         ax = axes[j]
         draw_cells(ax, leaves.lo[sure], leaves.hi[sure], color)
         draw_cells(ax, leaves.lo[maybe], leaves.hi[maybe], color, alpha=0.3)
@@ -557,7 +468,7 @@ def default_points(result: Analysis) -> Array:
     """Two far-apart poses certainly in the largest region."""
     index = max(range(len(result.regions)), key=lambda j: result.regions[j].area[0])
     leaves = result.tree.leaves()
-    sure = np.flatnonzero(region_cells(result, index)[0])
+    sure = np.flatnonzero(result.region_cells(index)[0])
     centres = 0.5 * (leaves.lo[sure] + leaves.hi[sure])
     a = centres[np.argmin(centres[:, 0])]
     b = centres[np.argmax(centres[:, 0])]

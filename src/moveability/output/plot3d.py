@@ -3,7 +3,7 @@
 With three pose axes the regions are solids. :func:`plot_slices` cuts them at
 chosen values of the third axis and draws the (x, y) slices;
 :func:`plot_regions_3d` draws the outer surface of each region's certified
-part, found by :func:`boundary_faces`. Colours and legends follow
+part, found by :func:`moveability.hypertree.topology.boundary_faces`. Colours and legends follow
 :mod:`moveability.output.plot`.
 """
 
@@ -17,18 +17,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 from ..hypertree.status import BOUNDARY, OUT
-from ..hypertree.topology import adjacency
-from ..hypertree.tree import HyperTree, to_coordinates
-from .plot import (
-    PALETTE,
-    UNDECIDED,
-    draw_cells,
-    figure_of,
-    frame_axes,
-    panels,
-    pyplot,
-    region_cells,
-)
+from ..hypertree.topology import boundary_faces
+from .axes import PALETTE, UNDECIDED, draw_cells, figure_of, frame_axes, panels, pyplot
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -36,7 +26,7 @@ if TYPE_CHECKING:
 
     from ..analysis.result import Analysis
 
-__all__ = ["DEFAULT_PHIS", "MAX_FACES", "boundary_faces", "plot_regions_3d", "plot_slices"]
+__all__ = ["DEFAULT_PHIS", "MAX_FACES", "plot_regions_3d", "plot_slices"]
 
 #: angles of the slices drawn by default (radians): -135, -45, 45 and 135 degrees
 DEFAULT_PHIS = tuple(float(v) for v in np.radians([-135.0, -45.0, 45.0, 135.0]))
@@ -153,7 +143,7 @@ def plot_slices(
     leaves = result.tree.leaves()
     lo, hi = leaves.lo, leaves.hi
     top = float(result.tree.hi[2])
-    masks = [region_cells(result, j) for j in range(len(result.regions))]
+    masks = [result.region_cells(j) for j in range(len(result.regions))]
     coloured = np.zeros(lo.shape[0], dtype=bool)
     for certain, possible in masks:
         coloured |= certain | possible
@@ -200,106 +190,6 @@ def plot_slices(
 
 
 # --------------------------------------------------------------- 3-D view
-def boundary_faces(
-    tree: HyperTree, chosen: ArrayLike
-) -> tuple[Array, Array, NDArray[np.intp], NDArray[np.int8]]:
-    """Faces of the outer surface of the union of the chosen leaves.
-
-    Each face is a piece of a chosen leaf's face where the leaf meets an
-    unchosen leaf (across periodic axes too) or the border of the box; faces
-    between two chosen leaves are left out. Where a large chosen leaf meets
-    several smaller leaves, only the pieces against unchosen ones are kept,
-    so the faces tile the surface exactly.
-
-    Parameters
-    ----------
-    tree : HyperTree
-    chosen : array_like of bool
-        Mask over the leaves.
-
-    Returns
-    -------
-    lo, hi : ndarray of float64, shape (m, k)
-        Corners of the faces; ``lo[:, axis] == hi[:, axis]`` on the normal axis.
-    axis : ndarray of intp, shape (m,)
-        Normal axis of each face.
-    side : ndarray of int8, shape (m,)
-        +1 where the chosen leaf lies below the face along ``axis``, -1 above.
-
-    Notes
-    -----
-    ``O(n k log n)`` for ``n`` leaves: one face-adjacency probe of the tree
-    (:func:`moveability.hypertree.topology.adjacency`), then numpy on the pairs.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from moveability import HyperTree
-    >>> tree = HyperTree.from_array(np.ones((2, 2, 2), dtype=bool), merge=False)
-    >>> lo, hi, axis, side = boundary_faces(tree, [True, True] + [False] * 6)
-    >>> len(axis)  # two unit cubes side by side: 10 outer faces
-    10
-    """
-    mask = np.asarray(chosen, dtype=bool).ravel()
-    if mask.size != len(tree):
-        raise InvalidParameterError("chosen", f"a mask of {len(tree)} leaves", mask.size)
-    k = tree.ndim
-    anchors = tree.anchors
-    ends = anchors + tree.layout.cell_sizes(tree.levels)
-    res = np.left_shift(np.int64(1), np.asarray(tree.max_depth, dtype=np.int64))
-    pairs = adjacency(tree, connectivity=1)
-    pairs = pairs[mask[pairs[:, 0]] != mask[pairs[:, 1]]]
-    s = np.where(mask[pairs[:, 0]], pairs[:, 0], pairs[:, 1])
-    o = np.where(mask[pairs[:, 0]], pairs[:, 1], pairs[:, 0])
-    lo_parts: list[NDArray[np.int64]] = []
-    hi_parts: list[NDArray[np.int64]] = []
-    axis_parts: list[NDArray[np.intp]] = []
-    side_parts: list[NDArray[np.int8]] = []
-    overlap_lo = np.maximum(anchors[s], anchors[o])
-    overlap_hi = np.minimum(ends[s], ends[o])
-    inner = np.flatnonzero(mask)
-    for a in range(k):
-        wrap = a in tree.periodic
-        others = np.ones(s.size, dtype=bool)
-        for b in range(k):
-            if b != a:
-                others &= overlap_hi[:, b] > overlap_lo[:, b]
-        top_s = ends[s, a] % res[a] if wrap else ends[s, a]
-        top_o = ends[o, a] % res[a] if wrap else ends[o, a]
-        for side, touch, plane in (
-            (1, top_s == anchors[o, a], ends[s, a]),
-            (-1, top_o == anchors[s, a], anchors[s, a]),
-        ):
-            sel = touch & others
-            f_lo, f_hi = overlap_lo[sel].copy(), overlap_hi[sel].copy()
-            f_lo[:, a] = f_hi[:, a] = plane[sel]
-            lo_parts.append(f_lo)
-            hi_parts.append(f_hi)
-            axis_parts.append(np.full(f_lo.shape[0], a, dtype=np.intp))
-            side_parts.append(np.full(f_lo.shape[0], side, dtype=np.int8))
-        if wrap:
-            continue
-        # the border of the box
-        for side, at, plane in (
-            (1, ends[inner, a] == res[a], ends[inner, a]),
-            (-1, anchors[inner, a] == 0, anchors[inner, a]),
-        ):
-            f_lo, f_hi = anchors[inner][at].copy(), ends[inner][at].copy()
-            f_lo[:, a] = f_hi[:, a] = plane[at]
-            lo_parts.append(f_lo)
-            hi_parts.append(f_hi)
-            axis_parts.append(np.full(f_lo.shape[0], a, dtype=np.intp))
-            side_parts.append(np.full(f_lo.shape[0], side, dtype=np.int8))
-    ints_lo = np.concatenate(lo_parts) if lo_parts else np.zeros((0, k), dtype=np.int64)
-    ints_hi = np.concatenate(hi_parts) if hi_parts else np.zeros((0, k), dtype=np.int64)
-    return (
-        to_coordinates(tree.lo, tree.hi, tree.layout, ints_lo),
-        to_coordinates(tree.lo, tree.hi, tree.layout, ints_hi),
-        np.concatenate(axis_parts) if axis_parts else np.zeros(0, dtype=np.intp),
-        np.concatenate(side_parts) if side_parts else np.zeros(0, dtype=np.int8),
-    )
-
-
 def _quads(lo: Array, hi: Array, axis: NDArray[np.intp]) -> Array:
     """The four corners (m, 4, 3) of axis-aligned faces of a 3-D box grid."""
     u = np.array([1, 0, 0])[axis]  # first in-plane axis: 1 when the normal is x, else 0
@@ -351,7 +241,7 @@ def plot_regions_3d(result: Analysis, ax: Axes | None = None, max_faces: int = M
     fig = figure_of(view)
     faces = []
     for j in range(len(result.regions)):
-        lo, hi, axis, _ = boundary_faces(result.tree, region_cells(result, j)[0])
+        lo, hi, axis, _ = boundary_faces(result.tree, result.region_cells(j)[0])
         faces.append(_quads(lo, hi, axis))
     total = sum(f.shape[0] for f in faces)
     handles = []

@@ -173,7 +173,6 @@ def export_vtk(result: Analysis, directory: str | os.PathLike[str]) -> list[Path
     ...     [p.name for p in export_vtk(result, d)]
     ['region-0.vtu', 'region-1.vtu', 'undecided.vtu']
     """
-    from .plot import region_cells
 
     tree = result.tree
     if tree.ndim not in (2, 3):
@@ -183,7 +182,7 @@ def export_vtk(result: Analysis, directory: str | os.PathLike[str]) -> list[Path
     measure = result.measure_name
     paths = []
     for j, region in enumerate(result.regions):
-        certain, possible = region_cells(result, j)
+        certain, possible = result.region_cells(j)
         cells = np.flatnonzero(certain | possible)
         comment = (
             f"moveability: {result.mechanism.name}, precision {result.precision_text}, "
