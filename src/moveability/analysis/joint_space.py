@@ -131,9 +131,12 @@ class _Distance:
         self.lower = iv.square(b1 - b2)
         self.upper = iv.square(b1 + b2)
 
-    def terms(self, lo: Array, hi: Array) -> tuple[Interval, list[Interval], list[Interval]]:
+    def terms(
+        self, lo: Array, hi: Array, hessian: bool = True
+    ) -> tuple[Interval, list[Interval], list[Interval]]:
         """``d^2`` (natural and mean-value forms intersected), its gradient and its
-        Hessian ``[h11, h12, h22]`` over the boxes."""
+        Hessian ``[h11, h12, h22]`` over the boxes (an empty list without
+        ``hessian``)."""
         q = [Interval(lo[:, i], hi[:, i]) for i in range(2)]
         (p1, v1, a1), (p2, v2, a2) = (
             leg.knee_boxes(q[i])  # type: ignore[attr-defined]
@@ -154,25 +157,27 @@ class _Distance:
         for i in range(2):
             mean = mean + grad[i] * (q[i] - mid[:, i])
         value = Interval(np.maximum(natural.lo, mean.lo), np.minimum(natural.hi, mean.hi))
-        hessian = [
+        if not hessian:
+            return value, grad, []
+        second = [
             (v1[0] * v1[0] + v1[1] * v1[1] + dx * a1[0] + dy * a1[1]) * 2.0,
             -((v1[0] * v2[0] + v1[1] * v2[1]) * 2.0),
             (v2[0] * v2[0] + v2[1] * v2[1] - dx * a2[0] - dy * a2[1]) * 2.0,
         ]
-        return value, grad, hessian
+        return value, grad, second
 
     def classify(self, lo: Array, hi: Array) -> NDArray[np.uint8]:
-        value, _, _ = self.terms(lo, hi)
+        value, _, _ = self.terms(lo, hi, hessian=False)
         inside = (value.lo > self.lower.hi) & (value.hi < self.upper.lo)
         outside = (value.hi < self.lower.lo) | (value.lo > self.upper.hi)
         return np.where(inside, IN, np.where(outside, OUT, BOUNDARY)).astype(np.uint8)
 
 
-def _attached(tree: HyperTree, distance: _Distance) -> NDArray[np.bool_]:
-    """The undecided leaves whose every point of D reaches an IN leaf within D."""
+def _attached(tree: HyperTree, leaves: Any, distance: _Distance) -> NDArray[np.bool_]:
+    """The undecided leaves whose every point of D reaches an IN leaf within D
+    (``leaves`` are the tree's leaves)."""
     status = tree.status
     rows = np.flatnonzero(status == BOUNDARY)
-    leaves = tree.leaves()
     lo, hi = leaves.lo[rows], leaves.hi[rows]
     with np.errstate(invalid="ignore", over="ignore"):
         value, grad, (h11, h12, h22) = distance.terms(lo, hi)
@@ -246,8 +251,12 @@ def _convex_blocks(
         det = h11 * h22 - h12 * h12
     convex = (h11.lo > 0) & (det.lo > 0) & (value.hi < distance.upper.lo)
     concave = (h11.hi < 0) & (det.lo > 0) & (value.lo > distance.lower.hi)
-    for j in np.flatnonzero(convex | concave):
-        if out[leaf[j]] or _on_box_edge(tree, b_lo[j], b_hi[j]):
+    # a box that meets a face of Q that is not glued (a stop) attaches nothing
+    stops = np.ones(tree.ndim, dtype=bool)
+    stops[list(tree.periodic)] = False
+    on_stop = ((b_lo == 0) | (b_hi == extent))[:, stops].any(axis=1)
+    for j in np.flatnonzero((convex | concave) & ~on_stop):
+        if out[leaf[j]]:
             continue
         inside = ((anchors >= b_lo[j]) & (ends <= b_hi[j])).all(axis=1)
         # the leaves across B's boundary: neighbours of leaves in B, outside B
@@ -255,17 +264,6 @@ def _convex_blocks(
         if done[pairs[cross, 1]].all():
             out |= inside & ~done
     return out
-
-
-def _on_box_edge(tree: HyperTree, b_lo: NDArray[np.int64], b_hi: NDArray[np.int64]) -> bool:
-    """Whether the box meets a face of the tree's box that is not glued (a stop)."""
-    extent = np.left_shift(np.int64(1), np.asarray(tree.max_depth, dtype=np.int64))
-    for axis in range(tree.ndim):
-        if axis in tree.periodic:
-            continue
-        if b_lo[axis] == 0 or b_hi[axis] == extent[axis]:
-            return True
-    return False
 
 
 def count_in_joint_space(
@@ -315,7 +313,8 @@ def count_in_joint_space(
         possible, n_possible = components(tree, status=IN | BOUNDARY, connectivity=2)
         certain, n_certain = components(tree, status=IN, connectivity=2)
         undecided = tree.status == BOUNDARY
-        loose = undecided & ~_attached(tree, distance)
+        leaves = tree.leaves()
+        loose = undecided & ~_attached(tree, leaves, distance)
         # certain components per possible component, and possible ones left loose
         inside = np.flatnonzero(certain >= 0)
         owner = np.full(n_certain, -1, dtype=np.int64)
@@ -328,7 +327,7 @@ def count_in_joint_space(
         open_parts = has_loose | (per >= 2)
         mask = undecided & (possible >= 0)
         mask[mask] = open_parts[possible[mask]]
-        volumes = np.prod(tree.leaves().hi - tree.leaves().lo, axis=1)
+        volumes = np.prod(leaves.hi - leaves.lo, axis=1)
         open_measure = float(volumes[mask].sum())
         mask &= tree.levels < tree.layout.n_levels
         room = (max_leaves - len(tree)) // 3
