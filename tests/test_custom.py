@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from moveability import analyze
+from moveability.errors import SpecError
 from moveability.limits import JointLimit
 from moveability.mechanisms import FiveBar
 from moveability.mechanisms.custom import CustomMechanism, normalise_custom_spec
-from moveability.spec import SpecError
 
 EXAMPLE = pathlib.Path(__file__).parent.parent / "examples" / "five-bar-custom.toml"
 PRECISION = 0.5

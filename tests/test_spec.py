@@ -10,8 +10,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from moveability.errors import InvalidParameterError, MoveabilityError
-from moveability.spec import MECHANISMS, SpecError, load_spec, parse_angle
+from moveability.errors import InvalidParameterError, MoveabilityError, SpecError
+from moveability.mechanisms.registry import MECHANISMS, load_spec
+from moveability.spec import parse_angle
 
 PAPER_TOML = """\
 # Chablat & Wenger, DETC'99, table 1
@@ -187,7 +188,7 @@ def test_errors_are_of_the_documented_types():
 
 
 def test_registry_lists_the_five_bar():
-    schema = MECHANISMS["five-bar"]
+    schema = MECHANISMS["five-bar"].schema
     assert schema.parameters == ("L0", "L1", "L2", "L3", "L4")
     assert schema.joints == ("theta1", "theta2")
 

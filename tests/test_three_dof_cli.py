@@ -11,9 +11,9 @@ from click.testing import CliRunner
 
 from moveability import analyze, load_analysis
 from moveability.cli import main
-from moveability.errors import InvalidParameterError
+from moveability.errors import InvalidParameterError, SpecError
 from moveability.mechanisms import Biglide, ThreeRPR, from_spec
-from moveability.spec import SpecError, load_spec
+from moveability.mechanisms.registry import load_spec
 
 RPR = {
     "mechanism": "3-RPR",

@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 from moveability import analyze
+from moveability.errors import SpecError
 from moveability.limits import JointLimit
 from moveability.mechanisms import from_spec
+from moveability.mechanisms.registry import load_spec
 from moveability.mechanisms.three_rrr import ThreeRRR
-from moveability.spec import SpecError, load_spec
 
 PRECISION = 0.75
 

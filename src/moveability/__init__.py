@@ -22,7 +22,7 @@ from .hypertree.setops import complement, difference, equals, intersection, unio
 from .hypertree.status import BOUNDARY, IN, OUT, Status
 from .hypertree.topology import adjacency, components
 from .hypertree.tree import HyperTree, Leaves, load
-from .spec import load_spec
+from .mechanisms.registry import load_spec
 
 try:
     __version__ = version("moveability")

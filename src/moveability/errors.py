@@ -9,7 +9,9 @@ from __future__ import annotations
 
 __all__ = [
     "IncompatibleTreesError",
+    "InputError",
     "InvalidParameterError",
+    "MissingExtraError",
     "MoveabilityError",
     "Plain",
     "PlanningError",
@@ -64,6 +66,47 @@ class SpecError(InvalidParameterError):
 class PlanningError(MoveabilityError):
     """No certified motion joins the poses (they lie in no common region, or the
     precision cannot tell)."""
+
+
+class InputError(MoveabilityError, ValueError):
+    """Bad input to a command that is not the value of one library parameter: an output
+    that cannot be written, an option that does not fit the command. The message is
+    ready to show (one line); the command line exits with status 2.
+
+    Examples
+    --------
+    >>> str(InputError("refusing to overwrite out.json: it exists (use --overwrite)"))
+    'refusing to overwrite out.json: it exists (use --overwrite)'
+    """
+
+    def __init__(self, message: str) -> None:
+        super().__init__(" ".join(str(message).splitlines()))
+
+
+class MissingExtraError(MoveabilityError, ImportError):
+    """A feature needs an optional dependency group that is not installed.
+
+    Parameters
+    ----------
+    extra : str
+        The group: ``pip install "moveability[extra]"`` installs it.
+    feature : str
+        What needs it, in words.
+    module : str or None
+        The module that could not be imported.
+
+    Examples
+    --------
+    >>> print(MissingExtraError("plot", "figures", "matplotlib"))
+    matplotlib is not installed (figures): pip install "moveability[plot]"
+    """
+
+    def __init__(self, extra: str, feature: str, module: str | None) -> None:
+        self.extra = extra
+        needed = module or f"the {extra} extra"
+        super().__init__(
+            f'{needed} is not installed ({feature}): pip install "moveability[{extra}]"'
+        )
 
 
 class Plain(str):

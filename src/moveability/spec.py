@@ -1,4 +1,4 @@
-"""Manipulator specifications: read a TOML file (or a parsed mapping), validate, normalise.
+"""Reading specifications: TOML files, angles, and the check of a mapping against a schema.
 
 A specification names a mechanism, gives its parameters (lengths) and the limits
 of its actuated joints, in radians::
@@ -18,18 +18,20 @@ Bounds are numbers or small expressions of ``pi`` (``"pi/2"``, ``"-3*pi/4"``),
 read by :func:`parse_angle` without ``eval``. Every joint of the mechanism needs
 a limit: a joint that turns freely says so with ``"unlimited"``.
 
-:func:`load_spec` returns a plain dict::
+A checked specification (:func:`check_spec`) is a plain dict::
 
     {"mechanism": "five-bar",
      "parameters": {"L0": 7.0, ...},
      "limits": {"theta1": (0.0, 3.14159...), "theta2": "unlimited"}}
 
-Mechanisms are known through :data:`MECHANISMS`; adding one is adding an entry.
+This module knows no mechanism: it reads TOML (:func:`read_toml`), angles
+(:func:`parse_angle`) and checks a mapping against a :class:`MechanismSchema`
+(:func:`check_spec`). The schemas, and :func:`~moveability.mechanisms.registry.load_spec`
+which picks one by the ``mechanism`` key, live in :mod:`moveability.mechanisms.registry`.
 """
 
 from __future__ import annotations
 
-import importlib
 import math
 import numbers
 import os
@@ -41,12 +43,12 @@ from typing import Any, NamedTuple
 from .errors import Plain, SpecError
 
 __all__ = [
-    "MECHANISMS",
+    "NOTHING",
     "UNLIMITED",
     "MechanismSchema",
-    "SpecError",
-    "load_spec",
+    "check_spec",
     "parse_angle",
+    "read_toml",
 ]
 
 #: the limit of a joint that turns freely
@@ -89,41 +91,8 @@ class MechanismSchema(NamedTuple):
     joint_kind: str = "angle"
 
 
-_THREE = ("1", "2", "3")
-
-#: known mechanisms: name -> schema
-MECHANISMS: dict[str, MechanismSchema] = {
-    "five-bar": MechanismSchema(
-        parameters=("L0", "L1", "L2", "L3", "L4"),
-        joints=("theta1", "theta2"),
-        defaults=None,
-    ),
-    "3-RPR": MechanismSchema(
-        parameters=("base", "platform"),
-        joints=tuple(f"rho{i}" for i in _THREE),
-        kinds={"base": "points", "platform": "points"},
-        joint_kind="distance",
-    ),
-    "biglide": MechanismSchema(
-        parameters=("L1", "L2"),
-        joints=("rho1", "rho2"),
-        joint_kind="position",
-    ),
-    "3-RRR": MechanismSchema(
-        parameters=("base", "platform", "proximal", "distal"),
-        joints=tuple(f"theta{i}" for i in _THREE),
-        kinds={"base": "points", "platform": "points", "proximal": "lengths", "distal": "lengths"},
-    ),
-}
-
-#: mechanisms whose specification has a format of its own: name -> normaliser
-#: (resolved lazily: the normalisers live with the mechanisms)
-_OWN_FORMAT: dict[str, str] = {
-    "custom": "moveability.mechanisms.custom.normalise_custom_spec",
-}
-
-
-_NOTHING = Plain("nothing")
+#: what an error message says was received for a missing key
+NOTHING = Plain("nothing")
 
 _NUMBER = r"(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?"
 _PLAIN_RE = re.compile(rf"\s*(?P<sign>[-+]?)\s*(?P<num>{_NUMBER})\s*")
@@ -203,101 +172,59 @@ def _parse_angle_text(text: str, name: str) -> float:
     return -magnitude if sign == "-" else magnitude
 
 
-def load_spec(source: str | os.PathLike[str] | Mapping[str, Any]) -> dict[str, Any]:
-    """Read, check and normalise the specification of a manipulator.
+def check_spec(data: Mapping[str, Any], name: str, schema: MechanismSchema) -> dict[str, Any]:
+    """Check a parsed specification against the schema of its mechanism and normalise it.
 
     Parameters
     ----------
-    source : str, os.PathLike or mapping
-        Path to a TOML file, or the mapping such a file parses to (the output of
-        :func:`load_spec` is accepted too).
+    data : mapping
+        The parsed TOML: ``mechanism``, ``[parameters]`` and ``[limits]``.
+    name : str
+        The mechanism's name, as the registry spells it.
+    schema : MechanismSchema
+        What the mechanism's specification must give.
 
     Returns
     -------
     dict
         ``{"mechanism": name, "parameters": {name: float}, "limits": {joint:
         (lo, hi) or "unlimited"}}``: parameters and joints in the order of the
-        mechanism's schema, bounds as floats in radians.
+        schema, bounds as floats in radians.
 
     Raises
     ------
     SpecError
-        A subclass of :class:`~moveability.errors.InvalidParameterError` whose
-        message names the key at fault: the file (missing, unreadable, not
-        TOML: tomllib's line and column are quoted), ``mechanism`` (unknown;
-        the known ones are listed), ``parameters.<name>`` (missing, unknown,
-        not a positive finite number), ``limits.<joint>`` (missing, unknown,
-        not a pair ``[lo, hi]`` nor ``"unlimited"``, a bound that is not an
-        angle, ``lo >= hi``, wider than 2 pi), or a top-level key that is
-        not one of ``mechanism``, ``parameters``, ``limits``.
+        Naming the key at fault: ``parameters.<name>`` (missing, unknown, not a
+        positive finite number), ``limits.<joint>`` (missing, unknown, not a
+        pair ``[lo, hi]`` nor ``"unlimited"``, a bound that is not an angle,
+        ``lo >= hi``, wider than 2 pi), or a top-level key that is not one of
+        ``mechanism``, ``parameters``, ``limits``.
 
     Examples
     --------
-    >>> spec = load_spec({
-    ...     "mechanism": "five-bar",
-    ...     "parameters": {"L0": 7, "L1": 8, "L2": 5, "L3": 8, "L4": 5},
-    ...     "limits": {"theta1": [0, "pi"], "theta2": "unlimited"},
-    ... })
-    >>> spec["parameters"]
-    {'L0': 7.0, 'L1': 8.0, 'L2': 5.0, 'L3': 8.0, 'L4': 5.0}
-    >>> spec["limits"]
-    {'theta1': (0.0, 3.141592653589793), 'theta2': 'unlimited'}
-    >>> load_spec(spec) == spec
-    True
-
-    From a file:
-
-    >>> import pathlib, tempfile
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     path = pathlib.Path(tmp, "five-bar.toml")
-    ...     _ = path.write_text('''
-    ... mechanism = "five-bar"
-    ... [parameters]
-    ... L0 = 7.0
-    ... L1 = 8.0
-    ... L2 = 5.0
-    ... L3 = 8.0
-    ... L4 = 5.0
-    ... [limits]
-    ... theta1 = ["-pi", "pi"]
-    ... theta2 = [0.0, "pi/2"]
-    ... ''')
-    ...     load_spec(path)["limits"]["theta2"]
-    (0.0, 1.5707963267948966)
-
-    Errors name the key:
-
-    >>> load_spec({"mechanism": "five-bar", "parameters": {"L0": 7, "L1": 8, "L2": -5}})
+    >>> schema = MechanismSchema(parameters=("L",), joints=("q",))
+    >>> check_spec({"parameters": {"L": 2}, "limits": {"q": [0, "pi/2"]}}, "toy", schema)
+    {'mechanism': 'toy', 'parameters': {'L': 2.0}, 'limits': {'q': (0.0, 1.5707963267948966)}}
+    >>> check_spec({"parameters": {"L": -2}, "limits": {"q": "unlimited"}}, "toy", schema)
     Traceback (most recent call last):
         ...
-    moveability.errors.SpecError: invalid parameters.L2: expected a positive finite length, got -5
+    moveability.errors.SpecError: invalid parameters.L: expected a positive finite length, got -2
     """
-    if isinstance(source, Mapping):
-        data: Mapping[str, Any] = source
-    elif isinstance(source, str | os.PathLike):
-        data = _read_toml(source)
-    else:
-        raise SpecError("spec", "a path to a TOML file or a mapping", source)
-
-    name = _mechanism(data.get("mechanism", _NOTHING))
-    if name in _OWN_FORMAT:
-        module, _, function = _OWN_FORMAT[name].rpartition(".")
-        normalise = getattr(importlib.import_module(module), function)
-        return dict(normalise(data))
     for key in data:
         if key not in _TOP_KEYS:
             raise SpecError(
                 str(key), "one of the keys " + ", ".join(map(repr, _TOP_KEYS)), Plain(str(key))
             )
-    schema = MECHANISMS[name]
     return {
         "mechanism": name,
-        "parameters": _parameters(data.get("parameters", _NOTHING), name, schema),
-        "limits": _limits(data.get("limits", _NOTHING), name, schema),
+        "parameters": _parameters(data.get("parameters", NOTHING), name, schema),
+        "limits": _limits(data.get("limits", NOTHING), name, schema),
     }
 
 
-def _read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The mapping a TOML file parses to; a missing, unreadable or malformed file is a
+    :class:`~moveability.errors.SpecError` naming it (tomllib's line and column quoted)."""
     shown = os.fspath(path)
     try:
         with open(path, "rb") as stream:
@@ -312,17 +239,6 @@ def _read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     except tomllib.TOMLDecodeError as error:
         # tomllib's message ends with "(at line L, column C)"
         raise SpecError(f"spec {shown}", "valid TOML", Plain(str(error))) from None
-
-
-def _mechanism(value: object) -> str:
-    names = [*MECHANISMS, *_OWN_FORMAT]
-    known = ", ".join(map(repr, names))
-    if isinstance(value, str):
-        lowered = {n.lower(): n for n in names}
-        name = value.strip().lower()
-        if name in lowered:
-            return lowered[name]
-    raise SpecError("mechanism", f"one of {known}", value)
 
 
 def _table(value: object, key: str, allowed: str) -> Mapping[str, Any]:
@@ -350,7 +266,7 @@ def _parameters(value: object, mechanism: str, schema: MechanismSchema) -> dict[
         elif key in defaults:
             given = defaults[key]
         else:
-            given = _NOTHING
+            given = NOTHING
         out[key] = _parameter(given, f"parameters.{key}", kinds.get(key, "length"), schema)
     return out
 
@@ -411,9 +327,9 @@ def _limits(
     out: dict[str, tuple[float, float] | str] = {}
     for joint in schema.joints:
         key = f"limits.{joint}"
-        limit = table.get(joint, _NOTHING)
-        if limit is _NOTHING:
-            raise SpecError(key, allowed, _NOTHING)
+        limit = table.get(joint, NOTHING)
+        if limit is NOTHING:
+            raise SpecError(key, allowed, NOTHING)
         if isinstance(limit, str):
             if limit.strip().lower() != UNLIMITED:
                 raise SpecError(key, allowed, limit)
@@ -443,7 +359,7 @@ def _strokes(
     out: dict[str, tuple[float, float] | str] = {}
     for joint in schema.joints:
         key = f"limits.{joint}"
-        limit = table.get(joint, _NOTHING)
+        limit = table.get(joint, NOTHING)
         if not isinstance(limit, Sequence) or isinstance(limit, str) or len(limit) != 2:
             raise SpecError(key, allowed, limit)
         if not all(_is_number(v) and math.isfinite(v) for v in limit):

@@ -142,7 +142,7 @@ def analyze(
     Parameters
     ----------
     mechanism : Mechanism, mapping or path
-        A mechanism, or a spec (see :func:`moveability.spec.load_spec`).
+        A mechanism, or a spec (see :func:`moveability.mechanisms.registry.load_spec`).
     precision : float or sequence of float
         Undecided leaves are refined until at most this wide (pose units: lengths
         and radians); one number, or one per pose axis.
@@ -180,9 +180,7 @@ def analyze(
     (2, False)
     """
     if not isinstance(mechanism, Mechanism):
-        from ..spec import load_spec
-
-        mechanism = from_spec(load_spec(mechanism))
+        mechanism = from_spec(mechanism)
     eps = check_precision(precision, len(mechanism.pose_names))
     lo, hi = mechanism.pose_box()
     depths = _depths(lo, hi, eps)

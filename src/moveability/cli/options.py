@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError, MoveabilityError, Plain
-from ..spec import load_spec
+from ..mechanisms.registry import load_spec
 
 __all__ = [
     "DEFAULT_PRECISION",
@@ -120,7 +120,7 @@ def json_options(command: F) -> F:
 
 
 def spec_argument(command: F) -> F:
-    """Add the ``SPEC`` argument: a TOML file, read by :func:`moveability.spec.load_spec`."""
+    """Add the ``SPEC`` argument: a TOML file (see :func:`~moveability.load_spec`)."""
     return click.argument("spec", metavar="SPEC")(command)
 
 

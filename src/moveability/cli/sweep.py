@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from ..spec import load_spec
+from ..mechanisms.registry import load_spec
 from . import options
 
 __all__ = ["sweep_command"]

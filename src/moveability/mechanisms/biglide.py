@@ -298,7 +298,7 @@ class Biglide(Mechanism):
         return {f"rho{i + 1}": [lim.lo, lim.hi] for i, lim in enumerate(self.limits)}
 
     def to_spec(self) -> dict[str, object]:
-        """The spec mapping of this mechanism (see :func:`moveability.spec.load_spec`)."""
+        """The spec mapping of this mechanism (see :func:`~.registry.load_spec`)."""
         return {
             "mechanism": self.name,
             "parameters": {"L1": self.lengths[0], "L2": self.lengths[1]},

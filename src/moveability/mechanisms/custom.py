@@ -590,6 +590,11 @@ class CustomMechanism(Mechanism):
         """The mechanism of a custom spec."""
         return cls(spec)
 
+    @staticmethod
+    def normalise_spec(data: Mapping[str, Any]) -> dict[str, Any]:
+        """The spec checked and normalised (:func:`normalise_custom_spec`)."""
+        return normalise_custom_spec(data)
+
     def to_spec(self) -> dict[str, Any]:
         """The normalised spec (JSON-ready)."""
         return normalise_custom_spec(self.spec)

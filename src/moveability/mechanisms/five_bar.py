@@ -89,7 +89,7 @@ class FiveBar(Mechanism):
         self.bounds = (lo - pad, hi + pad)
 
     def to_spec(self) -> dict[str, object]:
-        """The spec mapping of this mechanism (see :func:`moveability.spec.load_spec`)."""
+        """The spec mapping of this mechanism (see :func:`~.registry.load_spec`)."""
         names = ("L0", "L1", "L2", "L3", "L4")
         return {
             "mechanism": self.name,

@@ -258,7 +258,7 @@ class ThreeRPR(Mechanism):
         return {f"rho{i + 1}": [lim.lo, lim.hi] for i, lim in enumerate(self.limits)}
 
     def to_spec(self) -> dict[str, object]:
-        """The spec mapping of this mechanism (see :func:`moveability.spec.load_spec`)."""
+        """The spec mapping of this mechanism (see :func:`~.registry.load_spec`)."""
         return {
             "mechanism": self.name,
             "parameters": {

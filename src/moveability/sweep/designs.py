@@ -2,7 +2,7 @@
 
 A *varied name* is a parameter of the spec's mechanism (``L1``) or an end of a
 joint's limit (``theta1.min``, ``theta1.max``). A *design* is the spec with the
-varied values substituted, checked again by :func:`moveability.spec.load_spec`:
+varied values substituted, checked again by :func:`moveability.mechanisms.registry.load_spec`:
 a design that is not a valid spec (a negative length, ``lo >= hi``) raises a
 :class:`~moveability.errors.SpecError` when applied, which the sweep records as
 that design's error.
@@ -18,7 +18,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import InvalidParameterError, SpecError
-from ..spec import UNLIMITED, load_spec, parse_angle
+from ..mechanisms.registry import load_spec
+from ..spec import UNLIMITED, parse_angle
 
 __all__ = [
     "LIMIT_ENDS",
@@ -80,7 +81,7 @@ def parse_vary(text: str, spec: Mapping[str, Any]) -> Vary:
         :func:`moveability.spec.parse_angle`); ``COUNT`` is an integer >= 1.
         Only parameters given by one number can be varied.
     spec : mapping
-        A spec as returned by :func:`moveability.spec.load_spec`.
+        A spec as returned by :func:`moveability.mechanisms.registry.load_spec`.
 
     Returns
     -------
@@ -197,7 +198,7 @@ def apply_design(
     Parameters
     ----------
     spec : mapping
-        A spec as returned by :func:`moveability.spec.load_spec`.
+        A spec as returned by :func:`moveability.mechanisms.registry.load_spec`.
     names, values : sequences
         Varied names (checked by :func:`parse_vary`) and their values.
 

@@ -153,7 +153,7 @@ def design_row(
     Parameters
     ----------
     spec : mapping
-        The base spec (see :func:`moveability.spec.load_spec`).
+        The base spec (see :func:`moveability.mechanisms.registry.load_spec`).
     names, values : sequences
         The varied names and this design's values.
     precision : float
@@ -403,7 +403,7 @@ def run_sweep(
     Parameters
     ----------
     spec : mapping
-        A spec as returned by :func:`moveability.spec.load_spec`.
+        A spec as returned by :func:`moveability.mechanisms.registry.load_spec`.
     vary : sequence of str or Vary
         ``NAME=START:STOP:COUNT`` texts (see :func:`~moveability.sweep.parse_vary`).
     out : str or os.PathLike
