@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from moveability.cli import main, options
+from moveability.cli import main, options, running
 from moveability.errors import MoveabilityError, ResolutionError
 
 PAPER_TOML = """\
@@ -107,8 +107,8 @@ def fake(monkeypatch):
         calls["results"].append(result)
         return result
 
-    monkeypatch.setattr(options, "make_mechanism", make_mechanism)
-    monkeypatch.setattr(options, "run_analysis", run_analysis)
+    monkeypatch.setattr(running, "make_mechanism", make_mechanism)
+    monkeypatch.setattr(running, "run_analysis", run_analysis)
     return calls
 
 
@@ -348,7 +348,7 @@ def test_precision_too_fine_for_memory(monkeypatch, fake, spec):
     def refuse(mechanism, precision, progress):
         raise ResolutionError("precision", "a tree that fits in memory", precision)
 
-    monkeypatch.setattr(options, "run_analysis", refuse)
+    monkeypatch.setattr(running, "run_analysis", refuse)
     assert_bad_input(run(["regions", spec, "-p", "1e-9"]), "precision", "memory", "1e-09")
 
 
@@ -358,7 +358,7 @@ def test_mechanism_refusing_the_spec_is_bad_input(monkeypatch, spec):
     def refuse(spec):
         raise InvalidParameterError("parameters.L0", "a mechanism that can be assembled", 7.0)
 
-    monkeypatch.setattr(options, "make_mechanism", refuse)
+    monkeypatch.setattr(running, "make_mechanism", refuse)
     assert_bad_input(run(["regions", spec]), "parameters.L0")
 
 
@@ -366,7 +366,7 @@ def test_other_library_errors_exit_1(monkeypatch, fake, spec):
     def fail(mechanism, precision, progress):
         raise MoveabilityError("the analysis went wrong\nat depth 3")
 
-    monkeypatch.setattr(options, "run_analysis", fail)
+    monkeypatch.setattr(running, "run_analysis", fail)
     result = run(["regions", spec])
     assert result.exit_code == 1
     assert result.stderr == "Error: the analysis went wrong at depth 3\n"
@@ -467,13 +467,13 @@ def test_end_to_end_precision_too_fine(real):
 def test_terminal_progress_line_appears_after_the_delay():
     import io
 
-    from moveability.cli.options import _TerminalProgress
+    from moveability.cli.running import TerminalProgress
 
     stream = io.StringIO()
-    quiet = _TerminalProgress(stream, delay=3600.0)
+    quiet = TerminalProgress(stream, delay=3600.0)
     quiet(3, 10, 20)
     assert stream.getvalue() == ""
-    shown = _TerminalProgress(stream, delay=0.0)
+    shown = TerminalProgress(stream, delay=0.0)
     shown(4, 12, 40)
     shown(5, 0, 52)
     text = stream.getvalue()

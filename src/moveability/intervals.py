@@ -27,6 +27,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from .types import Array
+
 __all__ = [
     "Interval",
     "absolute",
@@ -45,7 +47,6 @@ __all__ = [
     "tan",
 ]
 
-Array = NDArray[np.float64]
 _INF = np.inf
 _PI_UP = float(np.nextafter(np.pi, np.inf))
 _TWO_PI = 2.0 * np.pi

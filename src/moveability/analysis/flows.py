@@ -43,6 +43,7 @@ from ..hypertree.topology import adjacency
 from ..hypertree.tree import HyperTree
 from ..intervals import Interval
 from ..mechanisms.base import REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
+from ..types import Array
 from .regions import split_legs
 from .sheets import SheetTable
 
@@ -57,7 +58,6 @@ __all__ = [
     "supports_flows",
 ]
 
-Array = NDArray[np.float64]
 #: slack when comparing joint ranges of slots (as in :mod:`moveability.analysis.regions`)
 _SPAN_TOL = 1e-9
 #: constraints whose enclosure, grown this many times about its midpoint, meets

@@ -50,11 +50,11 @@ from ..hypertree.topology import components
 from ..hypertree.tree import HyperTree
 from ..intervals import Interval
 from ..mechanisms.base import Mechanism
+from ..types import Array
 from .flows import attached_nodes, face_neighbours, flow_directions
 
 __all__ = ["JointSpaceCount", "count_in_joint_space", "has_dyads"]
 
-Array = NDArray[np.float64]
 #: depth of the first, uniform pass over each joint axis
 START_DEPTH = 6
 #: deepest level of the refinement on each joint axis

@@ -17,21 +17,19 @@ import itertools
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
 from scipy.sparse.csgraph import breadth_first_order
 
 from ..errors import PlanningError
 from ..hypertree.measurement import locate
 from ..hypertree.status import IN
 from ..mechanisms.base import REGULAR
+from ..types import Array
 from .sheets import classify_sheets
 
 if TYPE_CHECKING:
     from .result import Analysis
 
 __all__ = ["PlanningError", "plan_motion"]
-
-Array = NDArray[np.float64]
 
 
 def _start_nodes(analysis: Analysis, point: Array, leaf: int, component: int) -> list[int]:

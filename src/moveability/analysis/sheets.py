@@ -30,10 +30,9 @@ from ..hypertree.status import BOUNDARY, IN, OUT
 from ..intervals import Interval
 from ..limits import INSIDE, OUTSIDE
 from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
+from ..types import Array
 
 __all__ = ["SheetTable", "classify_sheets", "stack_tables"]
-
-Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -40,11 +40,10 @@ from ..intervals import Interval
 from ..limits import INSIDE, OUTSIDE, classify_angles
 from ..mechanisms import Mechanism
 from ..mechanisms.base import REACH_OUT, REGULAR
+from ..types import Array
 from .result import check_precision
 
 __all__ = ["WxQAnalysis", "WxQRegion", "analyze_wxq"]
-
-Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

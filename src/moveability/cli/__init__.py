@@ -3,7 +3,8 @@
 One module per command (:mod:`.regions`, :mod:`.locate`, :mod:`.feasible`,
 :mod:`.plan`, :mod:`.plot`,
 :mod:`.report`, :mod:`.export`, :mod:`.sweep`),
-shared options in :mod:`.options`. Results go to stdout (a summary, or JSON
+shared options in :mod:`.options`, how a command runs (logging, progress, errors)
+in :mod:`.running`, what it prints in :mod:`.printing`. Results go to stdout (a summary, or JSON
 with ``--json -``), logs to stderr. Bad input exits with status 2 and the one
 line ``Error: <message>`` on stderr.
 
@@ -22,7 +23,7 @@ from __future__ import annotations
 import click
 
 from .. import __version__
-from . import options
+from . import running
 from .export import export_command
 from .feasible import feasible_command
 from .locate import locate_command
@@ -35,7 +36,16 @@ from .sweep import sweep_command
 __all__ = ["main"]
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Commands(click.Group):
+    """The command group: the library's errors, wherever raised (an option's value
+    included), become one line on stderr (:func:`.running.reporting_errors`)."""
+
+    def invoke(self, ctx: click.Context) -> object:
+        with running.reporting_errors():
+            return super().invoke(ctx)
+
+
+@click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="moveability")
 @click.option("-v", "--verbose", count=True, help="More messages on stderr (repeat for more).")
 @click.option("-q", "--quiet", count=True, help="Fewer messages on stderr.")
@@ -43,7 +53,7 @@ __all__ = ["main"]
 def main(ctx: click.Context, verbose: int, quiet: int) -> None:
     """Regions of feasible point-to-point motions of fully-parallel manipulators."""
     ctx.obj = {"verbosity": verbose - quiet}
-    options.configure_logging(verbose - quiet)
+    running.configure_logging(verbose - quiet)
 
 
 main.add_command(regions_command)

@@ -8,7 +8,8 @@ from typing import Any
 
 import click
 
-from . import options
+from ..errors import InputError
+from . import options, printing, running
 
 __all__ = ["export_command", "format_export"]
 
@@ -49,17 +50,17 @@ def export_command(
     with 2 pose axes give quads in the plane z = 0, with 3 hexahedra. Prints
     the paths written (a JSON list of files with --json -).
     """
-    options.check_output(json_out, overwrite)
+    printing.check_output(json_out, overwrite)
     if os.path.isdir(out) and not overwrite:
         taken = sorted(name for name in os.listdir(out) if name.endswith(".vtu"))
         if taken:
-            raise options.InputError(
+            raise InputError(
                 f"refusing to overwrite {os.path.join(out, taken[0])}: --out holds .vtu files "
                 "(use --overwrite)"
             )
-    with options.reporting_errors():
-        mechanism = options.load_mechanism(spec)
-        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+    with running.reporting_errors():
+        mechanism = running.load_mechanism(spec)
+        result = running.run_analysis(mechanism, precision, running.progress_reporter())
         from ..hypertree.status import BOUNDARY
         from ..output.vtk import export_vtk
 
@@ -87,4 +88,4 @@ def export_command(
             }
         )
         data = {"precision": result.precision, "pose": list(mechanism.pose_names), "files": files}
-    options.write_output(data, json_out, overwrite, format_export)
+    printing.write_output(data, json_out, overwrite, format_export)

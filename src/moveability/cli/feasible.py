@@ -7,7 +7,8 @@ from typing import Any
 
 import click
 
-from . import options
+from ..types import word
+from . import options, printing, running
 
 __all__ = ["feasible_command", "format_feasible"]
 
@@ -25,7 +26,7 @@ def format_feasible(data: Mapping[str, Any]) -> str:
     >>> print(format_feasible({"feasible": None, "region": None, "postures": None}))
     feasible: unknown
     """
-    line = f"feasible: {options.three_valued(data['feasible'])}"
+    line = f"feasible: {word(data['feasible'])}"
     if data.get("region") is not None:
         line += f" (N-connected region {data['region']})"
     lines = [line]
@@ -57,8 +58,8 @@ def feasible_command(
     The answer is true, false or null (unknown at this precision); when true,
     the N-connected region and a posture (joint angles, radians) for each pose.
     """
-    options.check_output(json_out, overwrite)
-    with options.reporting_errors():
-        result, poses = options.analyse_poses(spec, points, precision, generalized_aspects)
+    printing.check_output(json_out, overwrite)
+    with running.reporting_errors():
+        result, poses = running.analyse_poses(spec, points, precision, generalized_aspects)
         data = result.feasible(poses)
-    options.write_output(data, json_out, overwrite, format_feasible)
+    printing.write_output(data, json_out, overwrite, format_feasible)

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from . import options
+from . import options, printing, running
 
 __all__ = ["format_locate", "locate_command"]
 
@@ -39,7 +39,7 @@ def format_locate(data: Mapping[str, Any]) -> str:
         ]
         for point in data["points"]
     ]
-    return options.format_table(header, rows)
+    return printing.format_table(header, rows)
 
 
 @click.command("locate")
@@ -63,8 +63,8 @@ def locate_command(
     for stdin) whose header names the pose coordinates (x,y for a five-bar),
     one pose per row. Each answer is in, out or unknown (at this precision).
     """
-    options.check_output(json_out, overwrite)
-    with options.reporting_errors():
-        result, poses = options.analyse_poses(spec, points, precision, generalized_aspects)
+    printing.check_output(json_out, overwrite)
+    with running.reporting_errors():
+        result, poses = running.analyse_poses(spec, points, precision, generalized_aspects)
         data = result.locate(poses)
-    options.write_output(data, json_out, overwrite, format_locate)
+    printing.write_output(data, json_out, overwrite, format_locate)

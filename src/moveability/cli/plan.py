@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from . import options
+from . import options, printing, running
 
 __all__ = ["format_plan", "plan_command"]
 
@@ -64,12 +64,12 @@ def plan_command(
     """
     from ..errors import PlanningError
 
-    options.check_output(json_out, overwrite)
-    with options.reporting_errors():
-        result, poses = options.analyse_poses(spec, points, precision)
+    printing.check_output(json_out, overwrite)
+    with running.reporting_errors():
+        result, poses = running.analyse_poses(spec, points, precision)
         try:
             data = result.plan(poses)
         except PlanningError as error:
             click.echo(f"Error: no motion: {error}", err=True)
             raise SystemExit(NO_MOTION) from None
-    options.write_output(data, json_out, overwrite, format_plan)
+    printing.write_output(data, json_out, overwrite, format_plan)

@@ -7,7 +7,9 @@ import os
 import click
 import numpy as np
 
-from . import options
+from ..errors import InputError
+from ..poses import read_points
+from . import options, running
 
 __all__ = ["plot_command"]
 
@@ -18,9 +20,9 @@ def _pose(text: str | None) -> np.ndarray | None:
     try:
         values = [float(v) for v in text.split(",")]
     except ValueError:
-        raise options.InputError(f"invalid --pose: expected x,y numbers, got {text!r}") from None
+        raise InputError(f"invalid --pose: expected x,y numbers, got {text!r}") from None
     if not np.isfinite(values).all():
-        raise options.InputError(f"invalid --pose: expected finite numbers, got {text!r}")
+        raise InputError(f"invalid --pose: expected finite numbers, got {text!r}")
     return np.array(values)
 
 
@@ -32,7 +34,7 @@ def _check_figure(name: str, mechanism: object) -> None:
     fitting = {2: FIGURES, 3: FIGURES_3D}.get(len(axes), ())
     if name not in fitting:
         use = f"use {' or '.join(fitting)}" if fitting else "no figure applies"
-        raise options.InputError(
+        raise InputError(
             f"invalid --figure: {name!r} does not apply to a mechanism with {len(axes)} pose "
             f"axes ({', '.join(axes)}); {use}"
         )
@@ -94,23 +96,23 @@ def plot_command(
     ext = os.path.splitext(out)[1].lower()
     allowed = (".gif",) if animate else (".png", ".svg")
     if ext not in allowed:
-        raise options.InputError(
+        raise InputError(
             f"invalid --out: expected a {' or '.join(allowed)} file, got {out!r}"
         )
     if animate and name != "path":
-        raise options.InputError("invalid --animate: only the path figure is animated")
+        raise InputError("invalid --animate: only the path figure is animated")
     if phis and name != "slices":
-        raise options.InputError("invalid --phi: only the slices figure takes angles")
+        raise InputError("invalid --phi: only the slices figure takes angles")
     if not all(np.isfinite(phis)):
-        raise options.InputError(f"invalid --phi: expected finite angles, got {list(phis)!r}")
+        raise InputError(f"invalid --phi: expected finite angles, got {list(phis)!r}")
     if os.path.exists(out) and not overwrite:
-        raise options.InputError(f"refusing to overwrite {out}: it exists (use --overwrite)")
+        raise InputError(f"refusing to overwrite {out}: it exists (use --overwrite)")
     at = _pose(pose)
-    with options.reporting_errors():
-        mechanism = options.load_mechanism(spec)
+    with running.reporting_errors():
+        mechanism = running.load_mechanism(spec)
         _check_figure(name, mechanism)
-        poses = options.read_points(points, mechanism.pose_names) if points else None
-        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+        poses = read_points(points, mechanism.pose_names) if points else None
+        result = running.run_analysis(mechanism, precision, running.progress_reporter())
         from ..output.plot import animate_path, figure
 
         try:

@@ -7,7 +7,8 @@ from typing import Any
 
 import click
 
-from . import options
+from ..types import word
+from . import options, printing, running
 
 __all__ = ["format_regions", "regions_command"]
 
@@ -55,13 +56,13 @@ def format_regions(data: Mapping[str, Any]) -> str:
                 str(region["id"]),
                 *([("det A > 0" if region["sign"] > 0 else "det A < 0")] if signed else []),
                 _area(region[measure]),
-                options.three_valued(region["equals_workspace"]),
+                word(region["equals_workspace"]),
             ]
             for region in data["regions"]
         ]
         head = ["region", *(["sign"] if signed else []), measure, "equals workspace"]
-        lines.append(options.format_table(head, rows))
-    lines.append(f"workspace N-connected: {options.three_valued(data['n_connected'])}")
+        lines.append(printing.format_table(head, rows))
+    lines.append(f"workspace N-connected: {word(data['n_connected'])}")
     undecided = data.get("undecided")
     if undecided:
         lines.append(
@@ -106,14 +107,14 @@ def regions_command(
     Areas are given as [inner, outer] bounds; three-valued answers are
     true, false or null (unknown at this precision).
     """
-    options.check_output(json_out, overwrite)
-    with options.reporting_errors():
-        mechanism = options.load_mechanism(spec)
-        result = options.run_analysis(
+    printing.check_output(json_out, overwrite)
+    with running.reporting_errors():
+        mechanism = running.load_mechanism(spec)
+        result = running.run_analysis(
             mechanism,
             precision,
-            options.progress_reporter(),
-            **options.analysis_options(generalized_aspects),
+            running.progress_reporter(),
+            **running.analysis_options(generalized_aspects),
         )
         data = result.to_dict()
-    options.write_output(data, json_out, overwrite, format_regions)
+    printing.write_output(data, json_out, overwrite, format_regions)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from . import options
+from . import options, running
 
 __all__ = ["report_command"]
 
@@ -25,9 +25,9 @@ def report_command(spec: str, out: str, precision: float) -> None:
 
     The page embeds its figures and opens in a browser without a server.
     """
-    with options.reporting_errors():
-        mechanism = options.load_mechanism(spec)
-        result = options.run_analysis(mechanism, precision, options.progress_reporter())
+    with running.reporting_errors():
+        mechanism = running.load_mechanism(spec)
+        result = running.run_analysis(mechanism, precision, running.progress_reporter())
         from ..output.report import write_report
 
         path = write_report(result, out)

@@ -8,8 +8,9 @@ from typing import Any
 
 import click
 
+from ..errors import InputError
 from ..mechanisms.registry import load_spec
-from . import options
+from . import options, running
 
 __all__ = ["sweep_command"]
 
@@ -27,7 +28,7 @@ class _LogProgress:
 
         if self._format.start is None:
             self._format.start, self._format.first_done = time.monotonic(), done
-        options.logger.info(
+        running.logger.info(
             "%s", self._format.line(done, total, time.monotonic() - self._format.start)
         )
 
@@ -36,15 +37,15 @@ def sweep_progress() -> Any:
     """The sweep's progress display: a bar on a terminal, log lines with ``-v``, else none."""
     from ..sweep.progress import SweepProgress
 
-    if sys.stderr.isatty() and options.logger.isEnabledFor(logging.WARNING):
+    if sys.stderr.isatty() and running.logger.isEnabledFor(logging.WARNING):
         return SweepProgress(sys.stderr, terminal=True)
-    if options.logger.isEnabledFor(logging.INFO):
+    if running.logger.isEnabledFor(logging.INFO):
         return _LogProgress()
     return None
 
 
 class _Jobs(click.ParamType):
-    """A positive integer; a bad value is an :class:`~.options.InputError` (one line)."""
+    """A positive integer; a bad value is an :class:`~.InputError` (one line)."""
 
     name = "N"
 
@@ -54,13 +55,13 @@ class _Jobs(click.ParamType):
         except (TypeError, ValueError):
             jobs = 0
         if jobs < 1:
-            raise options.InputError(f"invalid --jobs: expected a positive integer, got {value!r}")
+            raise InputError(f"invalid --jobs: expected a positive integer, got {value!r}")
         return jobs
 
 
 def _check_jobs(jobs: int | None, scheduler: str | None) -> int:
     if jobs is not None and scheduler is not None:
-        raise options.InputError(
+        raise InputError(
             "invalid --jobs: expected nothing with --scheduler (the Dask cluster sets the "
             f"workers), got {jobs}"
         )
@@ -128,7 +129,7 @@ def sweep_command(
     shows on a terminal (log lines with `moveability -v sweep ...`).
     """
     n_jobs = _check_jobs(jobs, scheduler)
-    with options.reporting_errors():
+    with running.reporting_errors():
         from ..sweep import check_varies, parse_vary, run_sweep
         from ..sweep.table import table_format
 
@@ -139,7 +140,7 @@ def sweep_command(
         if figure_out is not None:
             several = [v.name for v in varies if len(set(v.values)) > 1]
             if len(several) != 2:
-                raise options.InputError(
+                raise InputError(
                     "invalid --figure: expected a sweep in which exactly two --vary names take "
                     f"several values, got {', '.join(several) or 'none'}"
                 )

@@ -21,13 +21,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
+from ..types import Array
 from ._kernels import label_leaves
 from .status import IN, status_mask
 from .tree import HyperTree, to_coordinates
 
 __all__ = ["adjacency", "boundary_faces", "components", "directions"]
-
-Array = NDArray[np.float64]
 
 
 def directions(ndim: int, connectivity: int) -> NDArray[np.int8]:

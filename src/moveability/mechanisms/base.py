@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
+from ..types import Array
 
 __all__ = [
     "FOLD_INNER",
@@ -50,8 +51,6 @@ __all__ = [
 REACH_OUT, REGULAR, FOLD_OUTER, FOLD_INNER, REACH_UNKNOWN = 0, 1, 2, 3, 4
 
 _TWO_PI_UP = float(np.nextafter(2.0 * np.pi, np.inf))  # above the true 2 pi
-
-Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

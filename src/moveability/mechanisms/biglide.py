@@ -22,6 +22,7 @@ from .. import intervals as iv
 from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
+from ..types import Array
 from .base import (
     FOLD_OUTER,
     REACH_OUT,
@@ -34,8 +35,6 @@ from .base import (
 )
 
 __all__ = ["Biglide", "SliderLeg"]
-
-Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

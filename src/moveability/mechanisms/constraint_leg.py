@@ -73,11 +73,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..intervals import Interval
+from ..types import Array
 from .base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, LegReach
 
 __all__ = ["ConstraintLeg"]
 
-Array = NDArray[np.float64]
 #: ``f(x_1, ..., x_k, q)`` on arrays or Intervals
 Function = Callable[..., Any]
 

@@ -61,20 +61,18 @@ from typing import Any
 
 import numpy as np
 import sympy
-from numpy.typing import NDArray
 
 from .. import intervals as iv
 from ..errors import Plain, SpecError
 from ..intervals import Interval
 from ..limits import JointLimit
 from ..spec import parse_angle
+from ..types import Array
 from . import expressions as ex
 from .base import Mechanism
 from .constraint_leg import ConstraintLeg
 
 __all__ = ["CustomMechanism", "compile_expression", "normalise_custom_spec"]
-
-Array = NDArray[np.float64]
 
 _KEYS = (
     "mechanism",

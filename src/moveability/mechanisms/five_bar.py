@@ -14,12 +14,11 @@ from .. import intervals as iv
 from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
+from ..types import Array
 from .base import Mechanism
 from .rr_leg import RRLeg
 
 __all__ = ["FiveBar"]
-
-Array = NDArray[np.float64]
 
 
 class FiveBar(Mechanism):

@@ -20,11 +20,10 @@ from numpy.typing import NDArray
 from .. import intervals as iv
 from ..errors import InvalidParameterError
 from ..intervals import Interval
+from ..types import Array
 from .base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, LegReach
 
 __all__ = ["RRLeg"]
-
-Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from .. import intervals as iv
 from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
+from ..types import Array
 from .base import (
     REACH_UNKNOWN,
     REGULAR,
@@ -36,8 +37,6 @@ from .base import (
 )
 
 __all__ = ["RPRLeg", "ThreeRPR"]
-
-Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -14,17 +14,16 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
 from ..limits import JointLimit
+from ..types import Array
 from .base import Mechanism, three_points
 from .constraint_leg import ConstraintLeg
 from .expressions import cos, sin
 
 __all__ = ["ThreeRRR"]
 
-Array = NDArray[np.float64]
 _JOINTS = ("theta1", "theta2", "theta3")
 
 

@@ -6,7 +6,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
-from numpy.typing import NDArray
+
+from ..types import Array
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -15,8 +16,6 @@ if TYPE_CHECKING:
     from ..mechanisms.base import Mechanism
 
 __all__ = ["PALETTE", "UNDECIDED", "draw_cells", "figure_of", "frame_axes", "panels", "pyplot"]
-
-Array = NDArray[np.float64]
 
 #: Okabe-Ito colours
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000")

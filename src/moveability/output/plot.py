@@ -12,9 +12,10 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from ..hypertree.status import IN, OUT
+from ..types import Array
 from .axes import PALETTE, UNDECIDED, draw_cells, figure_of, frame_axes, panels, pyplot
 
 if TYPE_CHECKING:
@@ -42,8 +43,6 @@ __all__ = [
 FIGURES = ("workspace", "postures", "regions", "joint-space", "path")
 #: figures of mechanisms with three pose axes (see :mod:`moveability.output.plot3d`)
 FIGURES_3D = ("slices", "regions-3d")
-
-Array = NDArray[np.float64]
 
 
 def _axes(ax: Axes | None, **kwargs: Any) -> tuple[Figure, Axes]:

@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InvalidParameterError
 from ..hypertree.status import BOUNDARY, OUT
 from ..hypertree.topology import boundary_faces
+from ..types import Array
 from .axes import PALETTE, UNDECIDED, draw_cells, figure_of, frame_axes, panels, pyplot
 
 if TYPE_CHECKING:
@@ -32,8 +33,6 @@ __all__ = ["DEFAULT_PHIS", "MAX_FACES", "plot_regions_3d", "plot_slices"]
 DEFAULT_PHIS = tuple(float(v) for v in np.radians([-135.0, -45.0, 45.0, 135.0]))
 #: most faces drawn by :func:`plot_regions_3d` over all regions
 MAX_FACES = 20000
-
-Array = NDArray[np.float64]
 
 
 def _check_3d(result: Analysis, name: str) -> None:

@@ -1,0 +1,524 @@
+"""Speed of the certified analysis against plain numpy grids, and how its cost scales.
+
+Every measured thing runs in a fresh process. For a command (``moveability
+regions``, ``moveability --version``, ``python -c "import numpy"``) the wall time
+is taken around the process and the peak resident memory is the child's own
+``ru_maxrss`` (from :func:`os.wait4`). For Python work (a numpy grid, an
+in-process :func:`moveability.analyze`) this script runs itself with the hidden
+``--case`` option; the child reports the time of the work alone and its own
+``resource.getrusage(RUSAGE_SELF).ru_maxrss``, and the parent the process' wall
+time. The comparisons printed, each with its target (printed, never asserted):
+
+1. ``moveability regions examples/five-bar-paper.toml -p 0.035`` (the paper's
+   five-bar, 0 <= theta1, theta2 <= pi) against an uncertified numpy grid of
+   poses of the same spacing over the same box: closed-form inverse
+   kinematics, the 4 postures, the sign of det A = (P - C) x (P - D), the
+   regions labelled in the joint space (``scipy.ndimage.label`` on a grid over
+   (theta1, theta2), same spacing in radians, each sign of det A apart) and
+   the area of each region's image in W. Target: regions / numpy <= 0.5.
+2. The same for the 3-RPR of examples/three-rpr.toml at 1/256 of the span of
+   each pose axis: grid over (x, y, phi), strokes, sign of det A (the model's
+   rows ``(B_i - A_i, (R b_i) x (P - A_i))``), labelled with phi periodic
+   (``scipy.ndimage.label``, then a union-find across the faces phi = -pi, pi).
+   Target: regions / numpy <= 0.5.
+3. ``analyze`` of the user-defined five-bar (examples/five-bar-custom.toml)
+   against the built-in one, both at precision 0.05. Target: <= 3.
+4. ``moveability --version`` against ``python -c "import numpy"``, best of 5.
+   Target: <= 3.
+5. Scaling: leaves and seconds of ``analyze`` for the built-in five-bar at
+   precisions 0.1 .. 0.005 and the 3-RPR at 1/64 .. 1/256 of each span, with
+   leaves * eps (2-D) and leaves * eps^2 (3-D, eps the fraction of the span):
+   constant when the leaves follow the boundary of the sets.
+
+The counts and areas of the numpy grids are printed beside the certified
+bounds, so that a reader sees they agree. Run:
+``.venv/bin/python benchmarks/bench_speed.py [--quick | --full]`` (``--quick``
+in under a minute; ``--full`` adds finer scaling precisions).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+PAPER = EXAMPLES / "five-bar-paper.toml"  # 0 <= theta1, theta2 <= pi
+CUSTOM = EXAMPLES / "five-bar-custom.toml"  # the same five-bar as a user-defined spec
+RPR = EXAMPLES / "three-rpr.toml"
+#: the console script next to the interpreter running this file
+MOVEABILITY = str(Path(sys.executable).parent / "moveability")
+
+
+# ------------------------------------------------------------- numpy grids
+def five_bar_grid(spec_file: str, h: float) -> dict[str, Any]:
+    """Regions of a five-bar on a grid of poses of spacing ``h`` (uncertified)."""
+    import numpy as np
+    from scipy import ndimage
+
+    from moveability import load_spec
+    from moveability.mechanisms import from_spec
+
+    mechanism = from_spec(load_spec(spec_file))
+    start = time.perf_counter()
+    L0, L1, L2, L3, L4 = mechanism.lengths
+    limits = [(lim.lo, lim.hi) for lim in mechanism.limits]
+    if any(not np.isfinite(lo) or not np.isfinite(hi) for lo, hi in limits):
+        raise ValueError("the joint-space grid needs finite joint limits")
+    lo, hi = mechanism.pose_box()
+    n = np.ceil((hi - lo) / h).astype(int)
+    x = lo[0] + (np.arange(n[0]) + 0.5) * h
+    y = lo[1] + (np.arange(n[1]) + 0.5) * h
+    px, py = (v.ravel() for v in np.meshgrid(x, y, indexing="ij"))
+
+    def inverse(bx: float, a: float, b: float) -> list[Any]:
+        """Both elbow solutions of a leg based at (bx, 0): t = direction +- alpha."""
+        dx, dy = px - bx, py
+        rho = np.hypot(dx, dy)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            alpha = np.arccos((rho**2 + a * a - b * b) / (2 * a * rho))  # NaN out of reach
+        theta = np.arctan2(dy, dx)
+        return [theta + alpha, theta - alpha]
+
+    def within(t: Any, lim: tuple[float, float]) -> Any:
+        """Whether the angles are within [lo, hi] (modulo 2 pi); False for NaN."""
+        with np.errstate(invalid="ignore"):
+            return np.mod(t - lim[0], 2 * np.pi) <= lim[1] - lim[0]
+
+    # the 4 postures: angles, validity and sign of det A = (P - C) x (P - D)
+    postures = []
+    for t1 in inverse(0.0, L1, L2):
+        for t2 in inverse(L0, L3, L4):
+            ok = within(t1, limits[0]) & within(t2, limits[1])
+            cx, cy = L1 * np.cos(t1), L1 * np.sin(t1)
+            dx, dy = L0 + L3 * np.cos(t2), L3 * np.sin(t2)
+            det = (px - cx) * (py - dy) - (py - cy) * (px - dx)
+            postures.append((t1, t2, ok & (det != 0), np.sign(det)))
+    in_w = np.logical_or.reduce([p[2] for p in postures])
+
+    # the joint space: direct kinematics on a grid over (theta1, theta2), the two
+    # assembly modes P = M +- k n (n normal to CD), each with its sign of det A
+    nodes = [np.arange(int(np.floor((b - a) / h)) + 1) * h + a for a, b in limits]
+    q1, q2 = np.meshgrid(*nodes, indexing="ij")
+    cx, cy = L1 * np.cos(q1), L1 * np.sin(q1)
+    dx, dy = L0 + L3 * np.cos(q2), L3 * np.sin(q2)
+    ux, uy = dx - cx, dy - cy
+    d = np.hypot(ux, uy)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        along = (L2 * L2 - L4 * L4 + d * d) / (2 * d)
+        k = np.sqrt(L2 * L2 - along**2)  # NaN where the circles do not meet
+        ux, uy = ux / d, uy / d
+    labels, comp_sign = [], []
+    for s in (1.0, -1.0):
+        qx = cx + along * ux - s * k * uy
+        qy = cy + along * uy + s * k * ux
+        det = (qx - cx) * (qy - dy) - (qy - cy) * (qx - dx)
+        lab, count = ndimage.label(np.sign(det) == s)  # NaN compares unequal
+        labels.append(lab)
+        comp_sign += [int(s)] * count
+
+    # each component's image in W: the grid poses with a configuration in it
+    offsets = np.cumsum([0] + [int(lab.max()) for lab in labels])
+    hits = []
+    for t1, t2, ok, sign in postures:
+        i1 = np.rint(np.mod(t1[ok] - limits[0][0], 2 * np.pi) / h).astype(int)
+        i2 = np.rint(np.mod(t2[ok] - limits[1][0], 2 * np.pi) / h).astype(int)
+        i1 = np.minimum(i1, len(nodes[0]) - 1)
+        i2 = np.minimum(i2, len(nodes[1]) - 1)
+        for j, s in enumerate((1.0, -1.0)):
+            mine = sign[ok] == s
+            lab = labels[j][i1[mine], i2[mine]]
+            keep = lab > 0
+            hits.append((offsets[j] + lab[keep] - 1) * px.size + np.flatnonzero(ok)[mine][keep])
+    pairs = np.unique(np.concatenate(hits))
+    areas = np.bincount(pairs // px.size, minlength=offsets[-1]) * h * h
+    seconds = time.perf_counter() - start
+    regions = sorted(
+        ({"sign": s, "area": float(a)} for s, a in zip(comp_sign, areas, strict=True) if a > 0),
+        key=lambda r: -r["area"],
+    )
+    return {
+        "seconds": seconds,
+        "grid": f"{n[0]}x{n[1]} poses, {q1.shape[0]}x{q1.shape[1]} joints",
+        "workspace": float(in_w.sum() * h * h),
+        "regions": regions,
+    }
+
+
+def three_rpr_grid(spec_file: str, parts: int) -> dict[str, Any]:
+    """Regions of a 3-RPR on a grid of ``parts`` poses per axis (uncertified)."""
+    import numpy as np
+    from scipy import ndimage
+
+    from moveability import load_spec
+    from moveability.mechanisms import from_spec
+
+    mechanism = from_spec(load_spec(spec_file))
+    start = time.perf_counter()
+    lo, hi = mechanism.pose_box()
+    h = (hi - lo) / parts
+    h[2] = 2 * np.pi / parts  # phi: exactly one turn, so the seam faces meet
+    x = lo[0] + (np.arange(parts) + 0.5) * h[0]
+    y = lo[1] + (np.arange(parts) + 0.5) * h[1]
+    phi = -np.pi + (np.arange(parts) + 0.5) * h[2]
+    px, py = np.meshgrid(x, y, indexing="ij")
+    px, py = px[..., None], py[..., None]
+    sign = np.zeros((parts, parts, parts), dtype=np.int8)  # 0: out of W or singular
+    chunk = 16  # phi slices at a time: (parts, parts, chunk) arrays
+    for j in range(0, parts, chunk):
+        c, s = np.cos(phi[j : j + chunk]), np.sin(phi[j : j + chunk])
+        rows, ok = [], np.ones(px.shape[:2] + c.shape, dtype=bool)
+        for (ax, ay), (bx, by), lim in zip(
+            mechanism.base, mechanism.platform, mechanism.limits, strict=True
+        ):
+            rbx, rby = c * bx - s * by, s * bx + c * by  # R(phi) b_i
+            dx, dy = px + rbx - ax, py + rby - ay  # B_i - A_i
+            rho = np.hypot(dx, dy)
+            ok &= (rho >= lim.lo) & (rho <= lim.hi)
+            rows.append((dx, dy, rbx * (py - ay) - rby * (px - ax)))
+        (a, b, e), (f, g, i), (m, n, o) = rows
+        det = a * (g * o - i * n) - b * (f * o - i * m) + e * (f * n - g * m)
+        sign[:, :, j : j + chunk] = np.where(ok, np.sign(det), 0)
+    cell = float(np.prod(h))
+    workspace = float(np.count_nonzero(sign)) * cell  # det A = 0 has no volume on the grid
+
+    regions = []
+    for s in (1, -1):
+        lab, count = ndimage.label(sign == s)
+        # phi is periodic: merge the labels that meet across the faces phi = -pi, pi
+        parent = np.arange(count + 1)
+
+        def root(i: int, parent: Any = parent) -> int:
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        first, last = lab[:, :, 0].ravel(), lab[:, :, -1].ravel()
+        both = (first > 0) & (last > 0)
+        for u, v in np.unique(np.stack([first[both], last[both]], axis=1), axis=0):
+            ru, rv = root(int(u)), root(int(v))
+            if ru != rv:
+                parent[max(ru, rv)] = min(ru, rv)
+        roots = np.array([root(i) for i in range(count + 1)])
+        volumes = np.bincount(roots[lab.ravel()], minlength=count + 1)[1:] * cell
+        regions += [{"sign": s, "area": float(v)} for v in volumes if v > 0]
+    seconds = time.perf_counter() - start
+    regions.sort(key=lambda r: -r["area"])
+    return {
+        "seconds": seconds,
+        "grid": f"{parts}^3 poses",
+        "workspace": workspace,
+        "regions": regions,
+    }
+
+
+# ------------------------------------------------------------- analyses
+def run_analysis(spec_file: str, precision: Any, resolve: bool) -> dict[str, Any]:
+    """``analyze`` of a spec file, timed in this process (spec and mechanism included)."""
+    from moveability import analyze
+
+    start = time.perf_counter()
+    result = analyze(spec_file, precision=precision, resolve=resolve)
+    seconds = time.perf_counter() - start
+    data = result.to_dict()
+    data["seconds"] = seconds
+    return data
+
+
+def rpr_precision(parts: int) -> list[float]:
+    """1/parts of the span of each pose axis of the 3-RPR's analysis box."""
+    from moveability import load_spec
+    from moveability.mechanisms import from_spec
+
+    lo, hi = from_spec(load_spec(RPR)).pose_box()
+    return [float(v) for v in (hi - lo) / parts]
+
+
+def child(kind: str, args: list[Any]) -> None:
+    """Run one case in this (fresh) process and print its figures as JSON."""
+    import resource
+
+    if kind == "five-bar-grid":
+        out = five_bar_grid(args[0], float(args[1]))
+    elif kind == "three-rpr-grid":
+        out = three_rpr_grid(args[0], int(args[1]))
+    elif kind == "analyze":
+        out = run_analysis(args[0], args[1], bool(args[2]))
+    elif kind == "rpr-precision":
+        out = {"precision": rpr_precision(int(args[0]))}
+    else:
+        raise ValueError(kind)
+    out["rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(json.dumps(out))
+
+
+# ------------------------------------------------------------- processes
+def run_process(cmd: Sequence[str]) -> tuple[float, float, str]:
+    """Wall seconds, peak resident MiB (the child's own) and stdout of a command."""
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        start = time.perf_counter()
+        proc = subprocess.Popen(list(cmd), stdout=out, stderr=err)
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - start
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        err.seek(0)
+        if proc.returncode != 0:
+            message = err.read().decode(errors="replace").strip().splitlines()
+            raise RuntimeError(f"{' '.join(cmd)}: exit {proc.returncode}: {message[-1:]}")
+        return wall, usage.ru_maxrss / 1024, out.read().decode()
+
+
+def run_case(kind: str, *args: Any) -> dict[str, Any]:
+    """One case of :func:`child` in a fresh process; adds the process' wall time."""
+    wall, _, text = run_process(
+        [sys.executable, __file__, "--case", kind, json.dumps([str(a) for a in args])]
+    )
+    out: dict[str, Any] = json.loads(text.strip().splitlines()[-1])
+    out["wall"] = wall
+    return out
+
+
+def run_analysis_case(spec: Path, precision: Any, resolve: bool = True) -> dict[str, Any]:
+    wall, _, text = run_process(
+        [
+            sys.executable,
+            __file__,
+            "--case",
+            "analyze",
+            json.dumps([str(spec), precision, resolve]),
+        ]
+    )
+    out: dict[str, Any] = json.loads(text.strip().splitlines()[-1])
+    out["wall"] = wall
+    return out
+
+
+def regions_process(spec: Path, precision: str) -> dict[str, Any]:
+    """``moveability regions SPEC -p PRECISION --json -``: its JSON, time and memory."""
+    wall, rss, text = run_process([MOVEABILITY, "regions", str(spec), "-p", precision, "--json", "-"])
+    out: dict[str, Any] = json.loads(text)
+    out["wall"], out["rss_mib"] = wall, rss
+    return out
+
+
+def best_of(cmd: Sequence[str], n: int) -> tuple[float, float]:
+    """Best wall seconds and the peak MiB of that run, over ``n`` runs of a command."""
+    runs = [run_process(cmd)[:2] for _ in range(n)]
+    return min(runs)
+
+
+# ------------------------------------------------------------- output
+def table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
+    lines = ["  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True))]
+    lines.append("  ".join("-" * w for w in widths))
+    lines += ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
+    return "\n".join(lines)
+
+
+def ratio_line(label: str, a: float, b: float, target: float) -> str:
+    ratio = a / b
+    mark = "met" if ratio <= target else "NOT met"
+    return f"  ratio {label}: {a:.2f} s / {b:.2f} s = {ratio:.2f}   (target <= {target:g}: {mark})"
+
+
+def bounds(pair: Sequence[float]) -> str:
+    return f"[{pair[0]:.2f}, {pair[1]:.2f}]"
+
+
+def agreement(certified: dict[str, Any], grid: dict[str, Any], measure: str) -> str:
+    """The certified regions and the grid's, side by side (by sign, largest first)."""
+    cert = sorted(certified["regions"], key=lambda r: (-r["sign"], -r[measure][1]))
+    found = sorted(grid["regions"], key=lambda r: (-r["sign"], -r["area"]))
+    rows = []
+    w = certified["workspace"][measure]
+    inside = w[0] <= grid["workspace"] <= w[1]
+    rows.append(["W", "", bounds(w), f"{grid['workspace']:.2f}", "yes" if inside else "no"])
+    for s in (1, -1):
+        c = [r for r in cert if r["sign"] == s]
+        g = [r for r in found if r["sign"] == s]
+        for i in range(max(len(c), len(g))):
+            cb = bounds(c[i][measure]) if i < len(c) else "-"
+            ga = f"{g[i]['area']:.4g}" if i < len(g) else "-"
+            ok = "-"
+            if i < len(c) and i < len(g):
+                ok = "yes" if c[i][measure][0] <= g[i]["area"] <= c[i][measure][1] else "no"
+            rows.append([f"region {i}", f"{'+' if s > 0 else '-'}", cb, ga, ok])
+    count = certified["count"]
+    at_most = "?" if count["at_most"] is None else str(count["at_most"])
+    head = [
+        "",
+        "det A",
+        f"certified {measure} [in, out]",
+        f"grid {measure}",
+        "grid in bounds",
+    ]
+    return (
+        f"  regions: certified {count['at_least']}..{at_most} (listed "
+        f"{len(certified['regions'])}), grid {len(grid['regions'])} components\n"
+        + table(head, rows)
+    )
+
+
+def timing_rows(rows: list[tuple[str, float, float | None, float]]) -> str:
+    return table(
+        ["what", "process s", "work s", "peak MiB"],
+        [
+            [name, f"{wall:.2f}", "-" if work is None else f"{work:.2f}", f"{rss:.0f}"]
+            for name, wall, work, rss in rows
+        ],
+    )
+
+
+def indent(text: str) -> str:
+    return "\n".join("  " + line for line in text.splitlines())
+
+
+# ------------------------------------------------------------- cases
+def case_five_bar(eps: float) -> None:
+    print(f"1. five-bar of the paper, [0, pi], precision {eps:g}: regions process vs numpy grid")
+    cert = regions_process(PAPER, repr(eps))
+    grid = run_case("five-bar-grid", PAPER, eps)
+    rows = [
+        (f"moveability regions -p {eps:g} ({cert['leaves']} leaves)", cert["wall"], None,
+         cert["rss_mib"]),
+        (f"numpy grid h={eps:g} ({grid['grid']})", grid["wall"], grid["seconds"],
+         grid["rss_mib"]),
+    ]  # fmt: skip
+    print(indent(timing_rows(rows)))
+    print(ratio_line("regions / numpy (processes)", cert["wall"], grid["wall"], 0.5))
+    print(agreement(cert, grid, "area"))
+    print()
+
+
+def case_three_rpr(parts: int) -> None:
+    eps = run_case("rpr-precision", parts)["precision"]
+    text = ",".join(repr(v) for v in eps)
+    print(f"2. 3-RPR at 1/{parts} of each span (-p {','.join(f'{v:.4g}' for v in eps)})")
+    cert = regions_process(RPR, text)
+    grid = run_case("three-rpr-grid", RPR, parts)
+    rows = [
+        (f"moveability regions ({cert['leaves']} leaves)", cert["wall"], None, cert["rss_mib"]),
+        (f"numpy grid ({grid['grid']})", grid["wall"], grid["seconds"], grid["rss_mib"]),
+    ]
+    print(indent(timing_rows(rows)))
+    print(ratio_line("regions / numpy (processes)", cert["wall"], grid["wall"], 0.5))
+    print(agreement(cert, grid, "volume"))
+    undecided = cert["undecided"]
+    print(
+        f"  certified run: {undecided['components']} possible region(s) without a certified "
+        f"part, volume {undecided['boundary_volume']:.1f} in undecided leaves"
+    )
+    print()
+
+
+def case_custom(eps: float) -> None:
+    print(f"3. user-defined five-bar vs built-in, analyze at precision {eps:g} (fresh processes)")
+    built = run_analysis_case(PAPER, eps)
+    custom = run_analysis_case(CUSTOM, eps)
+    rows = []
+    for name, r in (("built-in five-bar", built), ("custom five-bar", custom)):
+        area = r["workspace"]["area"]
+        regions = ", ".join(bounds(x["area"]) for x in r["regions"])
+        rows.append([
+            name, f"{r['wall']:.2f}", f"{r['seconds']:.2f}", f"{r['rss_mib']:.0f}",
+            str(r["leaves"]), bounds(area), regions,
+        ])  # fmt: skip
+    head = ["what", "process s", "analyze s", "peak MiB", "leaves", "W area", "regions"]
+    print(indent(table(head, rows)))
+    print(ratio_line("custom / built-in (analyze)", custom["seconds"], built["seconds"], 3.0))
+    print("  (the custom spec's [bounds] box differs from the built-in's pose box)")
+    print()
+
+
+def case_startup(n: int) -> None:
+    print(f"4. start-up: moveability --version vs python -c 'import numpy' (best of {n})")
+    mv = best_of([MOVEABILITY, "--version"], n)
+    np_ = best_of([sys.executable, "-c", "import numpy"], n)
+    rows = [("moveability --version", mv[0], None, mv[1]),
+            ("python -c 'import numpy'", np_[0], None, np_[1])]  # fmt: skip
+    print(indent(timing_rows(rows)))
+    print(ratio_line("--version / import numpy", mv[0], np_[0], 3.0))
+    print()
+
+
+def case_scaling(five_bar: Sequence[float], rpr_parts: Sequence[int]) -> None:
+    print("5. scaling of analyze (fresh process each; leaves * eps^(k-1) constant when the")
+    print("   leaves follow the boundary; 3-RPR eps = the fraction of each span)")
+    rows = []
+    for eps in five_bar:
+        rows.append(scaling_row("five-bar", PAPER, eps, eps, 1))
+    for parts in rpr_parts:
+        precision = run_case("rpr-precision", parts)["precision"]
+        rows.append(scaling_row("3-RPR", RPR, precision, 1.0 / parts, 2))
+    head = ["mechanism", "eps", "leaves", "analyze s", "peak MiB", "regions",
+            "leaves*eps^(k-1)", "s*eps^(k-1)", "us/leaf"]  # fmt: skip
+    print(indent(table(head, rows)))
+    print()
+
+
+def scaling_row(name: str, spec: Path, precision: Any, eps: float, power: int) -> list[str]:
+    shown = f"{eps:g}" if power == 1 else f"1/{round(1 / eps)}"
+    try:
+        r = run_analysis_case(spec, precision)
+    except RuntimeError as error:
+        return [name, shown, "failed", str(error)[-40:], "", "", "", "", ""]
+    count = r["count"]
+    regions = str(count["at_least"]) if count["at_least"] == count["at_most"] else (
+        f"{count['at_least']}..{count['at_most'] or '?'}"
+    )
+    scale = eps**power
+    return [
+        name, shown, str(r["leaves"]), f"{r['seconds']:.2f}", f"{r['rss_mib']:.0f}", regions,
+        f"{r['leaves'] * scale:.3g}", f"{r['seconds'] * scale:.3g}",
+        f"{1e6 * r['seconds'] / r['leaves']:.1f}",
+    ]  # fmt: skip
+
+
+# ------------------------------------------------------------- main
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    size = parser.add_mutually_exclusive_group()
+    size.add_argument("--quick", action="store_true", help="small cases (under a minute)")
+    size.add_argument("--full", action="store_true", help="finer scaling precisions too")
+    parser.add_argument("--case", nargs=2, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.case:
+        child(args.case[0], json.loads(args.case[1]))
+        return
+    start = time.perf_counter()
+    # load (or compile) the numba kernels once, untimed, so no case pays for it
+    run_analysis_case(PAPER, 0.5)
+    run_analysis_case(RPR, run_case("rpr-precision", 16)["precision"])
+    if args.quick:
+        fb_eps, rpr_parts, custom_eps, n_start = 0.1, 64, 0.2, 3
+        five_bar, parts = [0.1, 0.05], [32, 64]
+    else:
+        fb_eps, rpr_parts, custom_eps, n_start = 0.035, 256, 0.05, 5
+        five_bar, parts = [0.1, 0.05, 0.02, 0.01, 0.005], [64, 128, 256]
+        if args.full:
+            five_bar += [0.002, 0.001]
+            parts += [512]
+    print(f"moveability speed benchmark ({os.cpu_count()} CPUs); times are wall seconds:")
+    print("process s = the whole process, work s = the computation inside it; peak MiB =")
+    print("the process' peak resident memory (ru_maxrss). Targets are printed, not asserted.")
+    print()
+    case_five_bar(fb_eps)
+    case_three_rpr(rpr_parts)
+    case_custom(custom_eps)
+    case_startup(n_start)
+    case_scaling(five_bar, parts)
+    print(f"total {time.perf_counter() - start:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
