@@ -55,24 +55,26 @@ CUSTOM = EXAMPLES / "five-bar-custom.toml"  # the same five-bar as a user-define
 RPR = EXAMPLES / "three-rpr.toml"
 #: the console script next to the interpreter running this file
 MOVEABILITY = str(Path(sys.executable).parent / "moveability")
+#: grid components below this share of W's measure are counted apart as grid noise
+TINY = 1e-4
 
 
 # ------------------------------------------------------------- numpy grids
-def five_bar_grid(spec_file: str, h: float) -> dict[str, Any]:
-    """Regions of a five-bar on a grid of poses of spacing ``h`` (uncertified)."""
+def five_bar_grid(params: dict[str, Any], h: float) -> dict[str, Any]:
+    """Regions of a five-bar on a grid of poses of spacing ``h`` (uncertified).
+
+    ``params`` (see :func:`mechanism_params`): lengths, joint limits and the
+    analysis' box of poses; numpy and scipy alone do the work.
+    """
     import numpy as np
     from scipy import ndimage
 
-    from moveability import load_spec
-    from moveability.mechanisms import from_spec
-
-    mechanism = from_spec(load_spec(spec_file))
     start = time.perf_counter()
-    L0, L1, L2, L3, L4 = mechanism.lengths
-    limits = [(lim.lo, lim.hi) for lim in mechanism.limits]
-    if any(not np.isfinite(lo) or not np.isfinite(hi) for lo, hi in limits):
+    L0, L1, L2, L3, L4 = params["lengths"]
+    limits = [tuple(lim) for lim in params["limits"]]
+    if not np.isfinite(limits).all():
         raise ValueError("the joint-space grid needs finite joint limits")
-    lo, hi = mechanism.pose_box()
+    lo, hi = np.array(params["lo"]), np.array(params["hi"])
     n = np.ceil((hi - lo) / h).astype(int)
     x = lo[0] + (np.arange(n[0]) + 0.5) * h
     y = lo[1] + (np.arange(n[1]) + 0.5) * h
@@ -147,22 +149,23 @@ def five_bar_grid(spec_file: str, h: float) -> dict[str, Any]:
     return {
         "seconds": seconds,
         "grid": f"{n[0]}x{n[1]} poses, {q1.shape[0]}x{q1.shape[1]} joints",
+        "cell": h * h,
         "workspace": float(in_w.sum() * h * h),
         "regions": regions,
     }
 
 
-def three_rpr_grid(spec_file: str, parts: int) -> dict[str, Any]:
-    """Regions of a 3-RPR on a grid of ``parts`` poses per axis (uncertified)."""
+def three_rpr_grid(params: dict[str, Any], parts: int) -> dict[str, Any]:
+    """Regions of a 3-RPR on a grid of ``parts`` poses per axis (uncertified).
+
+    ``params`` (see :func:`mechanism_params`): base and platform points, strokes
+    and the analysis' box of poses; numpy and scipy alone do the work.
+    """
     import numpy as np
     from scipy import ndimage
 
-    from moveability import load_spec
-    from moveability.mechanisms import from_spec
-
-    mechanism = from_spec(load_spec(spec_file))
     start = time.perf_counter()
-    lo, hi = mechanism.pose_box()
+    lo, hi = np.array(params["lo"]), np.array(params["hi"])
     h = (hi - lo) / parts
     h[2] = 2 * np.pi / parts  # phi: exactly one turn, so the seam faces meet
     x = lo[0] + (np.arange(parts) + 0.5) * h[0]
@@ -175,13 +178,13 @@ def three_rpr_grid(spec_file: str, parts: int) -> dict[str, Any]:
     for j in range(0, parts, chunk):
         c, s = np.cos(phi[j : j + chunk]), np.sin(phi[j : j + chunk])
         rows, ok = [], np.ones(px.shape[:2] + c.shape, dtype=bool)
-        for (ax, ay), (bx, by), lim in zip(
-            mechanism.base, mechanism.platform, mechanism.limits, strict=True
+        for (ax, ay), (bx, by), (r_lo, r_hi) in zip(
+            params["base"], params["platform"], params["limits"], strict=True
         ):
             rbx, rby = c * bx - s * by, s * bx + c * by  # R(phi) b_i
             dx, dy = px + rbx - ax, py + rby - ay  # B_i - A_i
             rho = np.hypot(dx, dy)
-            ok &= (rho >= lim.lo) & (rho <= lim.hi)
+            ok &= (rho >= r_lo) & (rho <= r_hi)
             rows.append((dx, dy, rbx * (py - ay) - rby * (px - ax)))
         (a, b, e), (f, g, i), (m, n, o) = rows
         det = a * (g * o - i * n) - b * (f * o - i * m) + e * (f * n - g * m)
@@ -215,6 +218,7 @@ def three_rpr_grid(spec_file: str, parts: int) -> dict[str, Any]:
     return {
         "seconds": seconds,
         "grid": f"{parts}^3 poses",
+        "cell": cell,
         "workspace": workspace,
         "regions": regions,
     }
@@ -233,13 +237,30 @@ def run_analysis(spec_file: str, precision: Any, resolve: bool) -> dict[str, Any
     return data
 
 
-def rpr_precision(parts: int) -> list[float]:
-    """1/parts of the span of each pose axis of the 3-RPR's analysis box."""
+def mechanism_params(spec_file: str) -> dict[str, Any]:
+    """What the numpy grids need of a mechanism: its parameters, joint limits and
+    the box of poses the analysis subdivides (``pose_box``)."""
     from moveability import load_spec
     from moveability.mechanisms import from_spec
 
-    lo, hi = from_spec(load_spec(RPR)).pose_box()
-    return [float(v) for v in (hi - lo) / parts]
+    mechanism: Any = from_spec(load_spec(spec_file))
+    lo, hi = mechanism.pose_box()
+    out = {
+        "limits": [[lim.lo, lim.hi] for lim in mechanism.limits],
+        "lo": [float(v) for v in lo],
+        "hi": [float(v) for v in hi],
+    }
+    if mechanism.name == "five-bar":
+        out["lengths"] = list(mechanism.lengths)
+    else:
+        out["base"] = [list(a) for a in mechanism.base]
+        out["platform"] = [list(b) for b in mechanism.platform]
+    return out
+
+
+def span_precision(params: dict[str, Any], parts: int) -> list[float]:
+    """1/parts of the span of each axis of the box of poses."""
+    return [(b - a) / parts for a, b in zip(params["lo"], params["hi"], strict=True)]
 
 
 def child(kind: str, args: list[Any]) -> None:
@@ -252,8 +273,8 @@ def child(kind: str, args: list[Any]) -> None:
         out = three_rpr_grid(args[0], int(args[1]))
     elif kind == "analyze":
         out = run_analysis(args[0], args[1], bool(args[2]))
-    elif kind == "rpr-precision":
-        out = {"precision": rpr_precision(int(args[0]))}
+    elif kind == "params":
+        out = mechanism_params(args[0])
     else:
         raise ValueError(kind)
     out["rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -278,33 +299,24 @@ def run_process(cmd: Sequence[str]) -> tuple[float, float, str]:
 
 
 def run_case(kind: str, *args: Any) -> dict[str, Any]:
-    """One case of :func:`child` in a fresh process; adds the process' wall time."""
-    wall, _, text = run_process(
-        [sys.executable, __file__, "--case", kind, json.dumps([str(a) for a in args])]
-    )
+    """One case of :func:`child` in a fresh process (arguments passed as JSON); adds
+    the process' wall time."""
+    wall, _, text = run_process([sys.executable, __file__, "--case", kind, json.dumps(args)])
     out: dict[str, Any] = json.loads(text.strip().splitlines()[-1])
     out["wall"] = wall
     return out
 
 
 def run_analysis_case(spec: Path, precision: Any, resolve: bool = True) -> dict[str, Any]:
-    wall, _, text = run_process(
-        [
-            sys.executable,
-            __file__,
-            "--case",
-            "analyze",
-            json.dumps([str(spec), precision, resolve]),
-        ]
-    )
-    out: dict[str, Any] = json.loads(text.strip().splitlines()[-1])
-    out["wall"] = wall
-    return out
+    """``analyze`` of a spec in a fresh process."""
+    return run_case("analyze", str(spec), precision, resolve)
 
 
 def regions_process(spec: Path, precision: str) -> dict[str, Any]:
     """``moveability regions SPEC -p PRECISION --json -``: its JSON, time and memory."""
-    wall, rss, text = run_process([MOVEABILITY, "regions", str(spec), "-p", precision, "--json", "-"])
+    wall, rss, text = run_process(
+        [MOVEABILITY, "regions", str(spec), "-p", precision, "--json", "-"]
+    )
     out: dict[str, Any] = json.loads(text)
     out["wall"], out["rss_mib"] = wall, rss
     return out
@@ -336,37 +348,48 @@ def bounds(pair: Sequence[float]) -> str:
 
 
 def agreement(certified: dict[str, Any], grid: dict[str, Any], measure: str) -> str:
-    """The certified regions and the grid's, side by side (by sign, largest first)."""
-    cert = sorted(certified["regions"], key=lambda r: (-r["sign"], -r[measure][1]))
-    found = sorted(grid["regions"], key=lambda r: (-r["sign"], -r["area"]))
-    rows = []
+    """The certified regions beside the grid's components (by sign, largest first).
+
+    Components of the grid smaller than ``TINY`` of W (a few cells at the edge
+    of W, where a one-cell-wide sliver breaks off) are counted apart.
+    """
     w = certified["workspace"][measure]
+    cert = sorted(certified["regions"], key=lambda r: (-r["sign"], -r[measure][1]))
+    tiny = [r for r in grid["regions"] if r["area"] < TINY * grid["workspace"]]
+    found = sorted(
+        (r for r in grid["regions"] if r["area"] >= TINY * grid["workspace"]),
+        key=lambda r: (-r["sign"], -r["area"]),
+    )
     inside = w[0] <= grid["workspace"] <= w[1]
-    rows.append(["W", "", bounds(w), f"{grid['workspace']:.2f}", "yes" if inside else "no"])
+    rows = [["W", "", bounds(w), f"{grid['workspace']:.2f}", "yes" if inside else "no"]]
     for s in (1, -1):
         c = [r for r in cert if r["sign"] == s]
         g = [r for r in found if r["sign"] == s]
         for i in range(max(len(c), len(g))):
-            cb = bounds(c[i][measure]) if i < len(c) else "-"
-            ga = f"{g[i]['area']:.4g}" if i < len(g) else "-"
             ok = "-"
             if i < len(c) and i < len(g):
                 ok = "yes" if c[i][measure][0] <= g[i]["area"] <= c[i][measure][1] else "no"
-            rows.append([f"region {i}", f"{'+' if s > 0 else '-'}", cb, ga, ok])
+            rows.append([
+                f"{'+' if s > 0 else '-'} region {i}",
+                "> 0" if s > 0 else "< 0",
+                bounds(c[i][measure]) if i < len(c) else "-",
+                f"{g[i]['area']:.2f}" if i < len(g) else "-",
+                ok,
+            ])  # fmt: skip
     count = certified["count"]
     at_most = "?" if count["at_most"] is None else str(count["at_most"])
-    head = [
-        "",
-        "det A",
-        f"certified {measure} [in, out]",
-        f"grid {measure}",
-        "grid in bounds",
-    ]
-    return (
-        f"  regions: certified {count['at_least']}..{at_most} (listed "
-        f"{len(certified['regions'])}), grid {len(grid['regions'])} components\n"
-        + table(head, rows)
-    )
+    proved = count["at_least"] if count["at_most"] == count["at_least"] else None
+    said = f"{proved} (proved)" if proved is not None else f"{count['at_least']}..{at_most}"
+    extra = ""
+    if tiny:
+        cells = sorted({round(r["area"] / grid["cell"]) for r in tiny})
+        extra = (
+            f" + {len(tiny)} tiny ({cells[0]}..{cells[-1]} cells each, "
+            f"{sum(r['area'] for r in tiny):.3g} in all)"
+        )
+    head = ["", "det A", f"certified {measure} [in, out]", f"grid {measure}", "grid in bounds"]
+    summary = f"  regions: certified {said}; grid {len(found)} components{extra}"
+    return summary + "\n" + indent(table(head, rows))
 
 
 def timing_rows(rows: list[tuple[str, float, float | None, float]]) -> str:
@@ -387,7 +410,7 @@ def indent(text: str) -> str:
 def case_five_bar(eps: float) -> None:
     print(f"1. five-bar of the paper, [0, pi], precision {eps:g}: regions process vs numpy grid")
     cert = regions_process(PAPER, repr(eps))
-    grid = run_case("five-bar-grid", PAPER, eps)
+    grid = run_case("five-bar-grid", run_case("params", str(PAPER)), eps)
     rows = [
         (f"moveability regions -p {eps:g} ({cert['leaves']} leaves)", cert["wall"], None,
          cert["rss_mib"]),
@@ -401,11 +424,12 @@ def case_five_bar(eps: float) -> None:
 
 
 def case_three_rpr(parts: int) -> None:
-    eps = run_case("rpr-precision", parts)["precision"]
+    params = run_case("params", str(RPR))
+    eps = span_precision(params, parts)
     text = ",".join(repr(v) for v in eps)
     print(f"2. 3-RPR at 1/{parts} of each span (-p {','.join(f'{v:.4g}' for v in eps)})")
     cert = regions_process(RPR, text)
-    grid = run_case("three-rpr-grid", RPR, parts)
+    grid = run_case("three-rpr-grid", params, parts)
     rows = [
         (f"moveability regions ({cert['leaves']} leaves)", cert["wall"], None, cert["rss_mib"]),
         (f"numpy grid ({grid['grid']})", grid["wall"], grid["seconds"], grid["rss_mib"]),
@@ -457,8 +481,9 @@ def case_scaling(five_bar: Sequence[float], rpr_parts: Sequence[int]) -> None:
     rows = []
     for eps in five_bar:
         rows.append(scaling_row("five-bar", PAPER, eps, eps, 1))
+    params = run_case("params", str(RPR))
     for parts in rpr_parts:
-        precision = run_case("rpr-precision", parts)["precision"]
+        precision = span_precision(params, parts)
         rows.append(scaling_row("3-RPR", RPR, precision, 1.0 / parts, 2))
     head = ["mechanism", "eps", "leaves", "analyze s", "peak MiB", "regions",
             "leaves*eps^(k-1)", "s*eps^(k-1)", "us/leaf"]  # fmt: skip
@@ -473,9 +498,9 @@ def scaling_row(name: str, spec: Path, precision: Any, eps: float, power: int) -
     except RuntimeError as error:
         return [name, shown, "failed", str(error)[-40:], "", "", "", "", ""]
     count = r["count"]
-    regions = str(count["at_least"]) if count["at_least"] == count["at_most"] else (
-        f"{count['at_least']}..{count['at_most'] or '?'}"
-    )
+    regions = f"{count['at_least']}..{count['at_most'] or '?'}"
+    if count["at_least"] == count["at_most"]:
+        regions = str(count["at_least"])
     scale = eps**power
     return [
         name, shown, str(r["leaves"]), f"{r['seconds']:.2f}", f"{r['rss_mib']:.0f}", regions,
@@ -498,7 +523,7 @@ def main() -> None:
     start = time.perf_counter()
     # load (or compile) the numba kernels once, untimed, so no case pays for it
     run_analysis_case(PAPER, 0.5)
-    run_analysis_case(RPR, run_case("rpr-precision", 16)["precision"])
+    run_analysis_case(RPR, span_precision(run_case("params", str(RPR)), 16))
     if args.quick:
         fb_eps, rpr_parts, custom_eps, n_start = 0.1, 64, 0.2, 3
         five_bar, parts = [0.1, 0.05], [32, 64]

@@ -73,8 +73,8 @@ class FakeResult:
             "points": [
                 {
                     "pose": [float(x) for x in p],
-                    "workspace": "in" if p[0] >= 0 else "out",
-                    "regions": {"0": "in" if p[0] >= 0 else "out", "1": "unknown"},
+                    "workspace": bool(p[0] >= 0),
+                    "regions": {"0": bool(p[0] >= 0), "1": None},
                 }
                 for p in points
             ],
@@ -239,7 +239,7 @@ def test_locate_json(fake, spec, points):
     assert [p["pose"] for p in data["points"]] == [[3.5, 9.0], [-1.0, 2.5]]
     for point in data["points"]:
         assert set(point) == {"pose", "workspace", "regions"}
-        assert point["workspace"] in {"in", "out", "unknown"}
+        assert point["workspace"] in {True, False, None}
         assert set(point["regions"]) == {"0", "1"}
     given = fake["results"][0].points[0]
     assert given.dtype == np.float64 and given.shape == (2, 2)
@@ -250,7 +250,7 @@ def test_locate_summary(fake, spec, points):
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()
     assert lines[0].split() == ["pose", "workspace", "region", "0", "region", "1"]
-    assert lines[1].split() == ["3.5,", "9", "in", "in", "unknown"]
+    assert lines[1].split() == ["3.5,", "9", "yes", "yes", "unknown"]
     assert len(lines) == 3
 
 
@@ -443,9 +443,9 @@ def test_end_to_end_locate_and_feasible(real, tmp_path):
     assert len(data["points"]) == 2
     for point, pose in zip(data["points"], [[3.5, 8.0], [3.5, 4.0]], strict=True):
         assert point["pose"] == pytest.approx(pose)
-        assert point["workspace"] in {"in", "out", "unknown"}
+        assert point["workspace"] in {True, False, None}
         assert set(point["regions"]) == {str(i) for i in ids}
-        assert set(point["regions"].values()) <= {"in", "out", "unknown"}
+        assert set(point["regions"].values()) <= {True, False, None}
 
     feasible = run(["feasible", real, str(path), "--precision", "0.5", "--json", "-"])
     assert feasible.exit_code == 0, feasible.output

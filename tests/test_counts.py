@@ -95,7 +95,7 @@ def test_equal_leg_biglide_is_decided_with_the_defaults(precision):
     assert biglide_count(m) == 4
     # the small region (rho1 < rho2) is found: the pose the issue names is in it
     answers = result.locate([[-2.5, 4.99]])["points"][0]["regions"]
-    assert "in" in answers.values()
+    assert True in answers.values()
 
 
 def test_equal_leg_biglide_plain_bounds_hold():

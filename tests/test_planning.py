@@ -57,7 +57,7 @@ def test_planned_motions_are_valid(lengths, limit):
     planned = 0
     for region in result.regions:
         answers = result.locate(cand)["points"]
-        inside = cand[[a["regions"][str(region.id)] == "in" for a in answers]]
+        inside = cand[[a["regions"][str(region.id)] is True for a in answers]]
         for _ in range(4):
             points = inside[rng.choice(len(inside), 3, replace=False)]
             motion = result.plan(points)

@@ -233,22 +233,22 @@ def _check_analysis(m: FiveBar, precision: float, rng: np.random.Generator, n_pt
     answers = result.locate(pts)["points"]
     sets, rob, okp = ref.regions_at(pts)
     for k, a in enumerate(answers):
-        if a["workspace"] == "out" and okp[k].any():
+        if a["workspace"] is False and okp[k].any():
             bad.append(("pose with a valid configuration answered out of W", pts[k]))
-        if a["workspace"] == "in" and rob[k] and not okp[k].any():
+        if a["workspace"] is True and rob[k] and not okp[k].any():
             bad.append(("pose without a valid configuration answered in W", pts[k]))
         if not rob[k]:
             continue
         for r in result.regions:
             tg = target[r.id]
             v = a["regions"][str(r.id)]
-            if v == "in" and not any(s == r.sign for _, s in sets[k]):
+            if v is True and not any(s == r.sign for _, s in sets[k]):
                 bad.append(("in a region without a configuration of its sign", r.id, pts[k]))
             if tg is None:
                 continue
-            if v == "in" and tg not in sets[k]:
+            if v is True and tg not in sets[k]:
                 bad.append(("answered in a region it is not in", r.id, pts[k], sets[k], tg))
-            if v == "out" and tg in sets[k]:
+            if v is False and tg in sets[k]:
                 bad.append(("answered out of a region it is in", r.id, pts[k], sets[k], tg))
 
     # 4. feasibility of random sets of poses of W
@@ -536,7 +536,7 @@ def test_adversarial_poses(design):
         seen = [
             {x for x in s if x[1] == r.sign}
             for a, s, rb in zip(answers, sets, robust, strict=True)
-            if rb and a["regions"][str(r.id)] == "in"
+            if rb and a["regions"][str(r.id)] is True
         ]
         common = set.intersection(*seen) if seen else set()
         target[r.id] = next(iter(common)) if len(common) == 1 else None
@@ -544,15 +544,15 @@ def test_adversarial_poses(design):
         ws = a["workspace"]
         if exact is not None:
             # without stops W is exactly the set of poses both legs reach
-            if ws == "in":
+            if ws is True:
                 assert (exact[k] >= 0).all(), (pts[k], exact[k])
-            if ws == "out":
+            if ws is False:
                 assert (exact[k] < 0).any(), (pts[k], exact[k])
-        elif ws == "out":
+        elif ws is False:
             assert not ok[k].any(), pts[k]
         for r in result.regions:
             v = a["regions"][str(r.id)]
-            if v == "in":
+            if v is True:
                 # a valid configuration of the region's sign, clearly
                 good = ok_p[k] & (sign[k] == r.sign)
                 assert good.any() or (np.abs(det[k][ok_p[k]]) < 1e-9 * scale).any(), (
@@ -562,9 +562,9 @@ def test_adversarial_poses(design):
                 if exact is not None:
                     assert (exact[k] >= 0).all(), (pts[k], exact[k])
             if target[r.id] is not None and robust[k]:
-                if v == "in":
+                if v is True:
                     assert target[r.id] in sets[k], (pts[k], r.id)
-                if v == "out":
+                if v is False:
                     assert target[r.id] not in sets[k], (pts[k], r.id)
 
 
@@ -844,6 +844,6 @@ def test_pose_outside_the_tree_box_is_not_declared_out():
     sign = result.regions[j].sign
     assert all(d * sign > Decimal("1e9") for d in along)
     # so X is in region j and {X, Y} is feasible
-    assert result.locate(X)["points"][0]["regions"][str(j)] != "out"
+    assert result.locate(X)["points"][0]["regions"][str(j)] is not False
     assert result.feasible(np.r_[X, Y])["feasible"] is not False
     assert result.feasible(X)["feasible"] is not False

@@ -122,7 +122,7 @@ def test_locate_and_feasible_read_x_y_phi(rpr_file, tmp_path):
     # the second pose is the first one turned once: the same answers
     assert answers[0]["workspace"] == answers[1]["workspace"]
     assert answers[0]["regions"] == answers[1]["regions"]
-    assert answers[2]["workspace"] == "out"
+    assert answers[2]["workspace"] is False
     bad = tmp_path / "bad.csv"
     bad.write_text("x,y\n1,2\n")
     out = CliRunner().invoke(main, ["locate", str(rpr_file), str(bad), "-p", "2,2,0.3"])

@@ -97,14 +97,14 @@ def test_answers_at_poses_agree_with_the_reference(result):
     located = result.locate(poses)["points"]
     n_in = n_out = 0
     for i, answer in enumerate(located):
-        if answer["workspace"] == "in":
+        if answer["workspace"] is True:
             assert valid[i].any()
             n_in += 1
-        elif answer["workspace"] == "out":
+        elif answer["workspace"] is False:
             assert not valid[i].any()
             n_out += 1
         for region in result.regions:
-            if answer["regions"][str(region.id)] == "in":
+            if answer["regions"][str(region.id)] is True:
                 # a configuration of the region's sign of det A
                 assert (valid[i] & (np.sign(det_ref[i]) == region.sign)).any()
     assert n_in > 10 and n_out > 10

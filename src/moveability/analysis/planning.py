@@ -263,7 +263,7 @@ def _check(analysis: Analysis, poses: Array, joints: Array, sign: int) -> None:
 def _apart_message(analysis: Analysis, points: Array, feasible: bool | None) -> str:
     p = np.asarray(points, dtype=np.float64).reshape(-1, len(analysis.mechanism.pose_names))
     located = analysis.locate(p)["points"]
-    outside = [i for i, a in enumerate(located) if a["workspace"] == "out"]
+    outside = [i for i, a in enumerate(located) if a["workspace"] is False]
     if outside:
         return f"pose(s) {outside} lie outside the workspace"
     if feasible is False:

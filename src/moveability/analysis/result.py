@@ -29,6 +29,7 @@ from ..intervals import Interval
 from ..limits import INSIDE
 from ..mechanisms import Mechanism, from_spec
 from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR
+from ..types import NO, UNKNOWN, YES, answer, word
 from .flows import (
     attached_nodes,
     dead_or_certified,
@@ -885,14 +886,14 @@ class Analysis:
     def _point_answers(
         self, p: NDArray[np.float64]
     ) -> tuple[NDArray[np.int8], NDArray[np.int8], NDArray[np.intp]]:
-        """Workspace answer (1 in, 0 out, -1 unknown), region answers (m, R), leaves."""
+        """Workspace answer and region answers (m, R) as codes (YES, NO, UNKNOWN), leaves."""
         m = p.shape[0]
         _, leaf = locate(self.tree, p)
         point_table = classify_sheets(self.mechanism, p, p)
-        ws = np.full(m, -1, dtype=np.int8)
-        ws[(point_table.exists & point_table.within).any(axis=1)] = 1
-        ws[(point_table.status == OUT).all(axis=1)] = 0
-        answers = np.full((m, len(self.regions)), -1, dtype=np.int8)
+        ws = np.full(m, UNKNOWN, dtype=np.int8)
+        ws[(point_table.exists & point_table.within).any(axis=1)] = YES
+        ws[(point_table.status == OUT).all(axis=1)] = NO
+        answers = np.full((m, len(self.regions)), UNKNOWN, dtype=np.int8)
         inside_box = leaf >= 0
         lf = np.where(inside_box, leaf, 0)
         g, t = self.graph, self.table
@@ -904,12 +905,18 @@ class Analysis:
             touch = (g.possible[row][lf] == u).any(axis=1)
             # a pose outside the box is outside W (the box holds W); unless the pose
             # itself is certified out, say so only through `ws` below
-            answers[:, j] = np.where(sure & inside_box, 1, np.where(~touch & inside_box, 0, -1))
-        answers[ws == 0] = 0
+            answers[:, j] = np.where(
+                sure & inside_box, YES, np.where(~touch & inside_box, NO, UNKNOWN)
+            )
+        answers[ws == NO] = NO
         return ws, answers, np.where(inside_box, leaf, -1)
 
     def locate(self, points: ArrayLike) -> dict[str, Any]:
         """Workspace and region membership of each pose, as a JSON-ready dict.
+
+        Each answer is ``True`` (the pose is in; a configuration of it lies in
+        the region), ``False`` (it is not) or ``None`` (undecided at the
+        precision).
 
         Examples
         --------
@@ -917,19 +924,18 @@ class Analysis:
         >>> from moveability.mechanisms import FiveBar
         >>> result = analyze(FiveBar(), precision=0.5)
         >>> result.locate([[3.5, 9.0]])["points"][0]["workspace"]
-        'in'
+        True
         """
         p = self._points(points)
         ws, answers, _ = self._point_answers(p)
-        names = {1: "in", 0: "out", -1: "unknown"}
         return {
             "regions": [r.id for r in self.regions],
             "points": [
                 {
                     "pose": [float(v) for v in p[i]],
-                    "workspace": names[int(ws[i])],
+                    "workspace": answer(int(ws[i])),
                     "regions": {
-                        str(r.id): names[int(answers[i, j])] for j, r in enumerate(self.regions)
+                        str(r.id): answer(int(answers[i, j])) for j, r in enumerate(self.regions)
                     },
                 }
                 for i in range(p.shape[0])
@@ -946,13 +952,13 @@ class Analysis:
         p = self._points(points)
         ws, answers, leaf = self._point_answers(p)
         for j, region in enumerate(self.regions):
-            if (answers[:, j] == 1).all():
+            if (answers[:, j] == YES).all():
                 return {
                     "feasible": True,
                     "region": region.id,
                     "postures": self._witnesses(p, leaf, j),
                 }
-        if (ws == 0).any():
+        if (ws == NO).any():
             return {"feasible": False, "region": None, "postures": None}
         if (leaf < 0).any():
             # a pose outside the box that the pose-level test could not place
@@ -1026,11 +1032,10 @@ class Analysis:
             f"{count_text(*self.count)}:",
         ]
         for r in self.regions:
-            eq = {True: "yes", False: "no", None: "unknown"}[r.equals_workspace]
             lines.append(
                 f"  region {r.id}: det A {'>' if r.sign > 0 else '<'} 0, {measure} in "
                 f"[{r.area[0]:.4f}, {r.area[1]:.4f}], postures {', '.join(r.postures)}, "
-                f"equals W: {eq}"
+                f"equals W: {word(r.equals_workspace)}"
             )
         u = self.undecided
         lines.append(
@@ -1038,8 +1043,7 @@ class Analysis:
             f"{u['detached']} detached certified part(s), "
             f"{u[f'boundary_{measure}']:.4f} of {measure} in undecided leaves"
         )
-        nc = {True: "yes", False: "no", None: "unknown"}[self.n_connected]
-        lines.append(f"W N-connected: {nc}")
+        lines.append(f"workspace N-connected: {word(self.n_connected)}")
         return "\n".join(lines)
 
     @classmethod

@@ -7,6 +7,7 @@ from typing import Any
 
 import click
 
+from ..types import word
 from . import options, printing, running
 
 __all__ = ["format_locate", "locate_command"]
@@ -20,22 +21,21 @@ def format_locate(data: Mapping[str, Any]) -> str:
     >>> print(format_locate({
     ...     "regions": [0, 1],
     ...     "points": [
-    ...         {"pose": [1.0, 2.5], "workspace": "in", "regions": {"0": "in", "1": "out"}},
-    ...         {"pose": [9.0, 0.0], "workspace": "unknown",
-    ...          "regions": {"0": "out", "1": "unknown"}},
+    ...         {"pose": [1.0, 2.5], "workspace": True, "regions": {"0": True, "1": False}},
+    ...         {"pose": [9.0, 0.0], "workspace": None, "regions": {"0": False, "1": None}},
     ...     ],
     ... }))
     pose     workspace region 0 region 1
-    1, 2.5          in       in      out
-    9, 0       unknown      out  unknown
+    1, 2.5         yes      yes       no
+    9, 0       unknown       no  unknown
     """
     ids = [str(region) for region in data["regions"]]
     header = ["pose", "workspace", *(f"region {region}" for region in ids)]
     rows = [
         [
             ", ".join(f"{coordinate:g}" for coordinate in point["pose"]),
-            point["workspace"],
-            *(point["regions"].get(region, "?") for region in ids),
+            word(point["workspace"]),
+            *(word(point["regions"][region]) for region in ids),
         ]
         for point in data["points"]
     ]
@@ -61,7 +61,8 @@ def locate_command(
 
     SPEC is a TOML file describing the manipulator. POINTS is a CSV file ('-'
     for stdin) whose header names the pose coordinates (x,y for a five-bar),
-    one pose per row. Each answer is in, out or unknown (at this precision).
+    one pose per row. Each answer is true, false or null in JSON (yes, no or
+    unknown in the summary): null when undecided at this precision.
     """
     printing.check_output(json_out, overwrite)
     with running.reporting_errors():

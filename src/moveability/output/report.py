@@ -14,6 +14,7 @@ import os
 from typing import TYPE_CHECKING, Any
 
 from ..errors import MoveabilityError
+from ..types import word
 
 if TYPE_CHECKING:
     from ..analysis.result import Analysis
@@ -45,10 +46,6 @@ def _png(fig: Any) -> str:
     return base64.b64encode(buffer.getvalue()).decode("ascii")
 
 
-def _tri(value: bool | None) -> str:
-    return {True: "yes", False: "no", None: "unknown"}[value]
-
-
 def write_report(result: Analysis, out_dir: str | os.PathLike[str]) -> str:
     """Write ``index.html`` into ``out_dir`` and return its path."""
     from .plot import figure, figures_for
@@ -66,7 +63,7 @@ def write_report(result: Analysis, out_dir: str | os.PathLike[str]) -> str:
     rows = "\n".join(
         f"<tr><td>{r['id']}</td><td>{'&gt;' if r['sign'] > 0 else '&lt;'} 0</td>"
         f"<td>[{r[measure][0]:.4f}, {r[measure][1]:.4f}]</td>"
-        f"<td>{_tri(r['equals_workspace'])}</td><td>{', '.join(r['postures'])}</td></tr>"
+        f"<td>{word(r['equals_workspace'])}</td><td>{', '.join(r['postures'])}</td></tr>"
         for r in data["regions"]
     )
     w = data["workspace"][measure]
@@ -98,7 +95,7 @@ img {{ max-width: 100%; }} figure {{ margin: 2em 0; }} pre {{ background: #f4f4f
 {data["leaves"]} cells.</p>
 <h2>Summary</h2>
 <p>Workspace {measure} in [{w[0]:.4f}, {w[1]:.4f}].
-W is N-connected: <strong>{_tri(data["n_connected"])}</strong>.</p>
+W is N-connected: <strong>{word(data["n_connected"])}</strong>.</p>
 <table><tr><th>region</th><th>det A</th><th>{measure} of W_Nj [inner, outer]</th>
 <th>equals W</th><th>postures</th></tr>
 {rows}
