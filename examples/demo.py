@@ -19,7 +19,7 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 
-from moveability import analyze, load_spec
+from moveability import analyze, default_poses, load_spec, plan_motion
 from moveability.output.plot import FIGURES, figure, figures_for
 from moveability.output.report import write_report
 from moveability.output.vtk import export_vtk
@@ -58,11 +58,12 @@ def main() -> None:
                 print()
         folder = OUT / path.stem
         folder.mkdir(parents=True, exist_ok=True)
+        motion = plan_motion(result, default_poses(result))
         for name in FIGURES:
-            fig = figure(name, result)
+            fig = figure(name, result, motion=motion)
             fig.savefig(folder / f"{name}.png", dpi=100, bbox_inches="tight")
             plt.close(fig)
-        print(f"  figures and report: {write_report(result, folder)}")
+        print(f"  figures and report: {write_report(result, folder, motion)}")
         print()
     other_mechanisms()
     sys.stdout.flush()
@@ -81,11 +82,13 @@ def other_mechanisms() -> None:
         print(f"computed in {time.perf_counter() - start:.2f} s")
         folder = OUT / path.stem
         folder.mkdir(parents=True, exist_ok=True)
-        for name in figures_for(result):
-            fig = figure(name, result)
+        names = figures_for(result)
+        motion = plan_motion(result, default_poses(result)) if "path" in names else None
+        for name in names:
+            fig = figure(name, result, motion=motion)
             fig.savefig(folder / f"{name}.png", dpi=100, bbox_inches="tight")
             plt.close(fig)
-        print(f"  figures and report: {write_report(result, folder)}")
+        print(f"  figures and report: {write_report(result, folder, motion)}")
         if len(result.mechanism.pose_names) == 3:
             files = export_vtk(result, folder / "vtk")
             print(f"  VTK files for ParaView: {len(files)} in {folder / 'vtk'}")

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from moveability import analyze
+from moveability import analyze, default_poses, plan_motion
 from moveability.hypertree.status import IN
 from moveability.limits import JointLimit
 from moveability.mechanisms import Biglide
@@ -139,7 +139,7 @@ def test_posture_changes_at_the_fold():
     leaf_in = (result.graph.certain == region.certain) & (result.table.status == IN)
     centres = 0.5 * (inside.lo + inside.hi)[leaf_in.any(axis=1)]
     a, b = centres[0], centres[-1]
-    motion = result.plan([a, b])
+    motion = plan_motion(result, [a, b])
     assert motion["feasible"] is True
 
 
@@ -164,5 +164,6 @@ def test_figures_draw_the_sliders(tmp_path):
     for posture in q:
         for rho in posture:
             assert any(np.allclose(d, [[rho, 0.0], pose]) for d in drawn), rho
+    motion = plan_motion(result, default_poses(result))
     for name in FIGURES:
-        figure(name, result).savefig(tmp_path / f"{name}.png", dpi=50)
+        figure(name, result, motion=motion).savefig(tmp_path / f"{name}.png", dpi=50)

@@ -11,7 +11,7 @@ import tomllib
 import numpy as np
 import pytest
 
-from moveability import analyze
+from moveability import analyze, plan_motion
 from moveability.errors import SpecError
 from moveability.limits import JointLimit
 from moveability.mechanisms import FiveBar
@@ -245,7 +245,7 @@ def test_planned_motion_changes_posture_through_a_user_defined_fold(pair):
     changed = 0
     for _ in range(3):
         points = inside[rng.choice(len(inside), 3, replace=False)]
-        motion = custom.plan(points)
+        motion = plan_motion(custom, points)
         poses = np.array([c["pose"] for c in motion["path"]])
         joints = np.array([c["joints"] for c in motion["path"]])
         assert np.abs(m.constraints(poses, joints)).max() <= 1e-9

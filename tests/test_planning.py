@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from moveability import analyze, load_spec
+from moveability import analyze, load_spec, plan_motion
 from moveability.analysis.planning import PlanningError
 from moveability.cli import main
 from moveability.limits import JointLimit
@@ -60,7 +60,7 @@ def test_planned_motions_are_valid(lengths, limit):
         inside = cand[[a["regions"][str(region.id)] is True for a in answers]]
         for _ in range(4):
             points = inside[rng.choice(len(inside), 3, replace=False)]
-            motion = result.plan(points)
+            motion = plan_motion(result, points)
             _check_motion(m, result, points, motion, eps)
             planned += 1
     assert planned >= 4 * len(result.regions)
@@ -69,7 +69,7 @@ def test_planned_motions_are_valid(lengths, limit):
 def test_changing_posture_on_the_way():
     m = load_spec("examples/five-bar-unlimited.toml")
     result = analyze(m, precision=0.1)
-    motion = result.plan([[0.0, 8.0], [6.0, -7.0], [-4.0, 1.0]])
+    motion = plan_motion(result, [[0.0, 8.0], [6.0, -7.0], [-4.0, 1.0]])
     names = [c["posture"] for c in motion["path"]]
     assert len(set(names)) > 1
     _check_motion(
@@ -80,7 +80,7 @@ def test_changing_posture_on_the_way():
 def test_poses_in_different_regions_are_refused():
     result = analyze(load_spec("examples/five-bar-full-turn.toml"), precision=0.1)
     with pytest.raises(PlanningError, match="poses 0 and 1"):
-        result.plan([[3.5, 12.4], [3.5, -12.4]])
+        plan_motion(result, [[3.5, 12.4], [3.5, -12.4]])
 
 
 def test_cli_plan_exit_codes(tmp_path):

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from moveability import analyze, load_spec
+from moveability import analyze, load_spec, plan_motion
 from moveability.cli import main
 from moveability.output.plot import (
     plot_joint_space,
@@ -107,7 +107,7 @@ def test_joint_space_traces_are_within_limits(result):
 
 
 def test_path_snapshots_match_the_motion(result):
-    motion = result.plan([[-4.0, -1.0], [1.0, 3.0], [10.0, 2.0]])
+    motion = plan_motion(result, [[-4.0, -1.0], [1.0, 3.0], [10.0, 2.0]])
     fig = plot_path(result, motion)
     m = result.mechanism
     path = motion["path"]

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from moveability import analyze
+from moveability import analyze, plan_motion
 from moveability.hypertree.measurement import locate
 from moveability.hypertree.status import BOUNDARY, IN
 from moveability.limits import JointLimit
@@ -197,7 +197,7 @@ def test_planned_motions_are_continuous_across_the_seam(case):
             b = below[np.argmin(np.linalg.norm(below[:, :2] - a[:2], axis=1))]
             pairs.append((a, b))
         for a, b in pairs:
-            motion = result.plan([a, b])
+            motion = plan_motion(result, [a, b])
             path = np.array([s["pose"] for s in motion["path"]])
             joints = np.array([s["joints"] for s in motion["path"]])
             assert np.abs(np.diff(path, axis=0)).max() <= step * (1 + 1e-9)

@@ -7,6 +7,7 @@ octree whose leaves are IN, OUT or BOUNDARY.
 
 from importlib.metadata import PackageNotFoundError, version
 
+from .analysis.planning import default_poses, plan_motion
 from .analysis.result import Analysis, Region, analyze, load_analysis
 from .errors import (
     IncompatibleTreesError,
@@ -49,6 +50,7 @@ __all__ = [
     "analyze",
     "complement",
     "components",
+    "default_poses",
     "difference",
     "equals",
     "intersection",
@@ -58,6 +60,7 @@ __all__ = [
     "load_spec",
     "locate",
     "measure",
+    "plan_motion",
     "project",
     "union",
 ]

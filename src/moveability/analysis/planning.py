@@ -17,6 +17,7 @@ import itertools
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import breadth_first_order
 
 from ..errors import PlanningError
@@ -29,7 +30,7 @@ from .sheets import classify_sheets
 if TYPE_CHECKING:
     from .result import Analysis
 
-__all__ = ["PlanningError", "plan_motion"]
+__all__ = ["PlanningError", "default_poses", "plan_motion"]
 
 
 def _start_nodes(analysis: Analysis, point: Array, leaf: int, component: int) -> list[int]:
@@ -188,14 +189,45 @@ def _densify(
     raise PlanningError("could not subdivide a segment to the requested step")
 
 
-def plan_motion(analysis: Analysis, points: Array, step: float | None = None) -> dict[str, Any]:
+def plan_motion(
+    analysis: Analysis, points: ArrayLike, step: float | None = None
+) -> dict[str, Any]:
     """A continuous motion through ``points`` in order, inside one region.
 
-    Returns ``{"feasible": True, "region": id, "path": [{"pose", "joints",
-    "posture"}, ...]}``. Raises :class:`PlanningError` when no region is known
-    to hold every pose. Periodic pose angles are continuous along the path: a
-    pose may be reached one or more whole turns away from the value asked.
+    Parameters
+    ----------
+    analysis : Analysis
+        The analysis of the mechanism.
+    points : array_like, shape (m, k)
+        The poses to pass through, in order.
+    step : float, optional
+        Consecutive configurations are at most ``step`` apart in pose and in
+        each joint (default: the smallest precision of the analysis).
+
+    Returns
+    -------
+    dict
+        ``{"feasible": True, "region": id, "path": [{"pose", "joints",
+        "posture"}, ...]}``. Every configuration satisfies the constraints,
+        keeps the region's sign of det A and respects the limits. Periodic
+        pose angles are continuous along the path: a pose may be reached one
+        or more whole turns away from the value asked.
+
+    Raises
+    ------
+    PlanningError
+        When no region is known to hold every pose (exit 3 in the CLI).
+
+    Examples
+    --------
+    >>> from moveability import analyze
+    >>> from moveability.mechanisms import FiveBar
+    >>> result = analyze(FiveBar(), precision=0.2)
+    >>> motion = plan_motion(result, [[1.0, 3.0], [5.0, 3.0]])
+    >>> motion["feasible"], motion["path"][0]["pose"]
+    (True, [1.0, 3.0])
     """
+    points = analysis.as_poses(points)
     answer = analysis.feasible(points)
     if not answer["feasible"]:
         raise PlanningError(_apart_message(analysis, points, answer["feasible"]))
@@ -273,3 +305,23 @@ def _apart_message(analysis: Analysis, points: Array, feasible: bool | None) -> 
                     return f"poses {i} and {j} lie in no common region"
         return "the poses lie in no common region"
     return "the precision cannot tell whether one region holds every pose; try a finer precision"
+
+
+def default_poses(analysis: Analysis) -> Array:
+    """Two far-apart poses certainly in the largest region (to show a motion when
+    none is asked).
+
+    Examples
+    --------
+    >>> from moveability import analyze
+    >>> from moveability.mechanisms import FiveBar
+    >>> default_poses(analyze(FiveBar(), precision=0.5)).shape
+    (2, 2)
+    """
+    index = max(range(len(analysis.regions)), key=lambda j: analysis.regions[j].area[0])
+    leaves = analysis.tree.leaves()
+    sure = np.flatnonzero(analysis.region_cells(index)[0])
+    centres = 0.5 * (leaves.lo[sure] + leaves.hi[sure])
+    a = centres[np.argmin(centres[:, 0])]
+    b = centres[np.argmax(centres[:, 0])]
+    return np.stack([a, b])

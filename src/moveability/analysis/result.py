@@ -843,7 +843,21 @@ class Analysis:
         return False
 
     # ------------------------------------------------------------- points
-    def _points(self, points: ArrayLike) -> NDArray[np.float64]:
+    def as_poses(self, points: ArrayLike) -> NDArray[np.float64]:
+        """The points as an ``(m, k)`` array of poses, checked and wrapped.
+
+        Raises :class:`~moveability.errors.InvalidParameterError` naming
+        ``points`` (not an array of ``k`` numbers per pose) or ``points[i]``
+        (a coordinate that is not finite). Periodic coordinates are wrapped
+        into the box.
+
+        Examples
+        --------
+        >>> from moveability import analyze
+        >>> from moveability.mechanisms import FiveBar
+        >>> analyze(FiveBar(), precision=0.5).as_poses([1.0, 3.0]).tolist()
+        [[1.0, 3.0]]
+        """
         k = len(self.mechanism.pose_names)
         try:
             p = np.asarray(points, dtype=np.float64)
@@ -860,28 +874,6 @@ class Analysis:
             i = int(np.flatnonzero(bad)[0])
             raise InvalidParameterError(f"points[{i}]", "finite coordinates", p[i].tolist())
         return self.mechanism.wrap_poses(p)
-
-    def plan(self, points: ArrayLike, step: float | None = None) -> dict[str, Any]:
-        """A continuous motion through the poses in order, inside one region.
-
-        Consecutive configurations are at most ``step`` (default: the precision)
-        apart in pose and in each joint; every configuration satisfies the
-        constraints, keeps the region's sign of det A and respects the limits.
-        Raises :class:`moveability.errors.PlanningError` (exit 3 in the CLI)
-        when no region is known to hold every pose.
-
-        Examples
-        --------
-        >>> from moveability import analyze
-        >>> from moveability.mechanisms import FiveBar
-        >>> result = analyze(FiveBar(), precision=0.2)
-        >>> motion = result.plan([[1.0, 3.0], [5.0, 3.0]])
-        >>> motion["feasible"], motion["path"][0]["pose"]
-        (True, [1.0, 3.0])
-        """
-        from .planning import plan_motion
-
-        return plan_motion(self, self._points(points), step)
 
     def _point_answers(
         self, p: NDArray[np.float64]
@@ -926,7 +918,7 @@ class Analysis:
         >>> result.locate([[3.5, 9.0]])["points"][0]["workspace"]
         True
         """
-        p = self._points(points)
+        p = self.as_poses(points)
         ws, answers, _ = self._point_answers(p)
         return {
             "regions": [r.id for r in self.regions],
@@ -949,7 +941,7 @@ class Analysis:
         "postures": [[t1, t2], ...]|null}``; the postures are joint angles of one
         valid configuration per pose in that region.
         """
-        p = self._points(points)
+        p = self.as_poses(points)
         ws, answers, leaf = self._point_answers(p)
         for j, region in enumerate(self.regions):
             if (answers[:, j] == YES).all():

@@ -62,13 +62,14 @@ def plan_command(
     each joint. Exits with status 3, saying which poses are apart, when no
     region is known to hold them all.
     """
+    from ..analysis.planning import plan_motion
     from ..errors import PlanningError
 
     printing.check_output(json_out, overwrite)
     with running.reporting_errors():
         result, poses = running.analyse_poses(spec, points, precision)
         try:
-            data = result.plan(poses)
+            data = plan_motion(result, poses)
         except PlanningError as error:
             click.echo(f"Error: no motion: {error}", err=True)
             raise SystemExit(NO_MOTION) from None

@@ -113,17 +113,18 @@ def plot_command(
         _check_figure(name, mechanism)
         poses = read_points(points, mechanism.pose_names) if points else None
         result = running.run_analysis(mechanism, precision, running.progress_reporter())
+        from ..analysis.planning import default_poses, plan_motion
         from ..output.plot import animate_path, figure
 
         try:
-            if animate:
-                from ..output.plot import default_points
-
-                motion = result.plan(poses if poses is not None else default_points(result))
+            motion = None
+            if name == "path":
+                motion = plan_motion(result, poses if poses is not None else default_poses(result))
+            if motion is not None and animate:
                 animate_path(result, motion, out)
             else:
                 angles = np.radians(phis) if phis else None
-                fig = figure(name, result, pose=at, points=poses, phis=angles)
+                fig = figure(name, result, pose=at, motion=motion, phis=angles)
                 fig.savefig(out, dpi=110, bbox_inches="tight")
         except PlanningError as error:
             click.echo(f"Error: no motion: {error}", err=True)

@@ -28,7 +28,13 @@ def report_command(spec: str, out: str, precision: float) -> None:
     with running.reporting_errors():
         mechanism = running.load_mechanism(spec)
         result = running.run_analysis(mechanism, precision, running.progress_reporter())
+        from ..analysis.planning import default_poses, plan_motion
+        from ..errors import PlanningError
         from ..output.report import write_report
 
-        path = write_report(result, out)
+        try:
+            motion, why = plan_motion(result, default_poses(result)), ""
+        except PlanningError as error:
+            motion, why = None, str(error)
+        path = write_report(result, out, motion, no_motion=why)
     click.echo(path)

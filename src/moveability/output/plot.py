@@ -8,7 +8,7 @@ in the units of the mechanism's spec, angles in radians.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -321,7 +321,7 @@ def plot_joint_space(result: Analysis, ax: Axes | None = None, samples: int = 4)
 
 
 # ---------------------------------------------------------------------- path
-def _frames(motion: dict[str, Any], count: int) -> list[int]:
+def _frames(motion: Mapping[str, Any], count: int) -> list[int]:
     path = motion["path"]
     changes = [k for k in range(1, len(path)) if path[k]["posture"] != path[k - 1]["posture"]]
     picks = set(np.linspace(0, len(path) - 1, count).round().astype(int).tolist())
@@ -330,7 +330,7 @@ def _frames(motion: dict[str, Any], count: int) -> list[int]:
 
 
 def plot_path(
-    result: Analysis, motion: dict[str, Any], count: int = 6, axes: Sequence[Axes] | None = None
+    result: Analysis, motion: Mapping[str, Any], count: int = 6, axes: Sequence[Axes] | None = None
 ) -> Figure:
     """A strip of snapshots of a planned motion, posture changes marked."""
     m = result.mechanism
@@ -362,7 +362,7 @@ def plot_path(
     return fig
 
 
-def animate_path(result: Analysis, motion: dict[str, Any], out: str, fps: int = 20) -> None:
+def animate_path(result: Analysis, motion: Mapping[str, Any], out: str, fps: int = 20) -> None:
     """Write a GIF of a planned motion."""
     plt = pyplot()
     from matplotlib.animation import FuncAnimation, PillowWriter
@@ -410,12 +410,13 @@ def figure(
     result: Analysis,
     *,
     pose: ArrayLike | None = None,
-    points: ArrayLike | None = None,
+    motion: Mapping[str, Any] | None = None,
     phis: ArrayLike | None = None,
 ) -> Figure:
     """One of :data:`FIGURES` or :data:`FIGURES_3D` for an analysis.
 
-    ``pose`` is for postures, ``points`` for path, ``phis`` (radians) for slices.
+    ``pose`` is for postures, ``motion`` (from :func:`moveability.plan_motion`) for
+    path, ``phis`` (radians) for slices.
     Asking a figure of the other number of pose axes raises
     :class:`~moveability.errors.InvalidParameterError` naming ``figure``.
     """
@@ -449,9 +450,11 @@ def figure(
         return plot_regions(result)
     if name == "joint-space":
         return plot_joint_space(result)
-    if points is None:
-        points = default_points(result)
-    return plot_path(result, result.plan(points))
+    if motion is None:
+        raise InvalidParameterError(
+            "motion", "a motion planned by moveability.plan_motion, for the path figure", None
+        )
+    return plot_path(result, motion)
 
 
 def _default_pose(result: Analysis) -> Array:
@@ -461,14 +464,3 @@ def _default_pose(result: Analysis) -> Array:
     score = (t.status == IN).sum(axis=1) + 1e-6 * (leaves.hi - leaves.lo).prod(axis=1)
     best = int(np.argmax(score))
     return 0.5 * (leaves.lo[best] + leaves.hi[best])
-
-
-def default_points(result: Analysis) -> Array:
-    """Two far-apart poses certainly in the largest region."""
-    index = max(range(len(result.regions)), key=lambda j: result.regions[j].area[0])
-    leaves = result.tree.leaves()
-    sure = np.flatnonzero(result.region_cells(index)[0])
-    centres = 0.5 * (leaves.lo[sure] + leaves.hi[sure])
-    a = centres[np.argmin(centres[:, 0])]
-    b = centres[np.argmax(centres[:, 0])]
-    return np.stack([a, b])

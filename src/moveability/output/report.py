@@ -11,6 +11,7 @@ import html
 import io
 import json
 import os
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from ..errors import MoveabilityError
@@ -46,8 +47,17 @@ def _png(fig: Any) -> str:
     return base64.b64encode(buffer.getvalue()).decode("ascii")
 
 
-def write_report(result: Analysis, out_dir: str | os.PathLike[str]) -> str:
-    """Write ``index.html`` into ``out_dir`` and return its path."""
+def write_report(
+    result: Analysis,
+    out_dir: str | os.PathLike[str],
+    motion: Mapping[str, Any] | None = None,
+    no_motion: str = "no motion was planned",
+) -> str:
+    """Write ``index.html`` into ``out_dir`` and return its path.
+
+    ``motion`` (from :func:`moveability.plan_motion`) is drawn in the path
+    figure; without one, the page says why (``no_motion``).
+    """
     from .plot import figure, figures_for
 
     os.makedirs(out_dir, exist_ok=True)
@@ -55,8 +65,11 @@ def write_report(result: Analysis, out_dir: str | os.PathLike[str]) -> str:
     images = []
     # two pose axes: the plane figures; three: slices and a 3-D view
     for name in figures_for(result):
+        if name == "path" and motion is None:
+            images.append((name, f"unavailable: {no_motion}"))
+            continue
         try:
-            images.append((name, _png(figure(name, result))))
+            images.append((name, _png(figure(name, result, motion=motion))))
         except MoveabilityError as error:  # e.g. no certified motion to draw
             images.append((name, f"unavailable: {error}"))
     measure = result.measure_name
