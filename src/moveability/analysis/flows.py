@@ -54,6 +54,7 @@ __all__ = [
     "face_neighbours",
     "flow_conditions",
     "flow_directions",
+    "into_corner",
     "slot_spans",
     "supports_flows",
 ]
@@ -494,7 +495,7 @@ def _adapted_flows(
                     np.where(lower[j][:, None], unit(joint_normal[i]), 0.0)
                     - np.where(upper[j][:, None], unit(joint_normal[i]), 0.0)
                 )
-            direction = unit(_into_corner(np.stack(normals, axis=1)))
+            direction = unit(into_corner(np.stack(normals, axis=1)))
             moving = usable & (np.abs(direction).sum(axis=1) > 0)
             if not moving.any():
                 continue
@@ -518,7 +519,7 @@ def _adapted_flows(
             faces[index] = _exit_faces(columns, columns)
 
 
-def _into_corner(normals: Array) -> Array:
+def into_corner(normals: Array) -> Array:
     """(n, k): a direction that moves into the corner that the active constraints'
     unit normals (n, C, k) bound (inactive rows are zero): the one whose dot
     product with each active normal is 1 (the dual basis), where the normals are

@@ -81,6 +81,11 @@ class Region:
         Whether W_Nj = W; None where the precision cannot decide.
     postures : tuple of str
         Postures met in the certified part of the region.
+    certain : int
+        The region's component of the certain graph (``Analysis.graph.certain``).
+    possible : int
+        Its component among the possible components of its sign
+        (``Analysis.graph.possible[row]``, see :attr:`row`).
     """
 
     id: int
@@ -90,6 +95,11 @@ class Region:
     postures: tuple[str, ...]
     certain: int
     possible: int
+
+    @property
+    def row(self) -> int:
+        """Row of the region's sign in the region graph: 0 for det A > 0, 1 for det A < 0."""
+        return 0 if self.sign > 0 else 1
 
 
 def check_precision(precision: float | Sequence[float], k: int) -> NDArray[np.float64]:
@@ -741,6 +751,30 @@ class Analysis:
         """The number of regions where it is proved, else None (see :attr:`count`)."""
         at_least, at_most = self.count
         return at_least if at_least == at_most else None
+
+    def workspace_cells(self) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """Leaves certainly in W, and leaves that W may meet besides.
+
+        Returns
+        -------
+        certain, possible : ndarray of bool, shape (n_leaves,)
+            ``certain``: a configuration of every pose of the leaf is valid;
+            ``possible`` (which holds ``certain``): the leaf is not certified
+            out of W. Masks over ``self.tree.leaves()``.
+
+        Examples
+        --------
+        >>> from moveability import analyze
+        >>> from moveability.mechanisms import FiveBar
+        >>> result = analyze(FiveBar(), precision=0.5)
+        >>> certain, possible = result.workspace_cells()
+        >>> lo, hi = result.workspace["area"]
+        >>> bool(abs(result.areas[certain].sum() - lo) < 1e-9), bool((possible >= certain).all())
+        (True, True)
+        """
+        certain: NDArray[np.bool_] = np.array(self._w_certain, dtype=bool)
+        possible: NDArray[np.bool_] = np.array(self._w_possible, dtype=bool)
+        return certain, possible
 
     def region_cells(self, index: int) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         """Leaves certainly in a region, and leaves where it may extend besides.

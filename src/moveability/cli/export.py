@@ -61,31 +61,8 @@ def export_command(
     with running.reporting_errors():
         mechanism = running.load_mechanism(spec)
         result = running.run_analysis(mechanism, precision, running.progress_reporter())
-        from ..hypertree.status import BOUNDARY
-        from ..output.vtk import export_vtk
+        from ..output.vtk import export_vtk, exported_files
 
-        paths = export_vtk(result, out)
-        measure = result.measure_name
-        files: list[dict[str, Any]] = []
-        for j, region in enumerate(result.regions):
-            certain, possible = result.region_cells(j)
-            files.append(
-                {
-                    "path": str(paths[j]),
-                    "region": region.id,
-                    "cells": int((certain | possible).sum()),
-                    "certified_cells": int(certain.sum()),
-                    measure: list(region.area),
-                }
-            )
-        files.append(
-            {
-                "path": str(paths[-1]),
-                "region": None,
-                "cells": int((result.tree.status == BOUNDARY).sum()),
-                "certified_cells": 0,
-                measure: [0.0, result.undecided[f"boundary_{measure}"]],
-            }
-        )
+        files = exported_files(result, export_vtk(result, out))
         data = {"precision": result.precision, "pose": list(mechanism.pose_names), "files": files}
     printing.write_output(data, json_out, overwrite, format_export)

@@ -8,6 +8,7 @@ import click
 import numpy as np
 
 from ..errors import InputError
+from ..extras import require
 from ..poses import read_points
 from . import options, running
 
@@ -109,6 +110,7 @@ def plot_command(
         raise InputError(f"refusing to overwrite {out}: it exists (use --overwrite)")
     at = _pose(pose)
     with running.reporting_errors():
+        require("matplotlib", "plot", "figures")
         mechanism = running.load_mechanism(spec)
         _check_figure(name, mechanism)
         poses = read_points(points, mechanism.pose_names) if points else None

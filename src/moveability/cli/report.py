@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from ..extras import require
 from . import options, running
 
 __all__ = ["report_command"]
@@ -26,6 +27,7 @@ def report_command(spec: str, out: str, precision: float) -> None:
     The page embeds its figures and opens in a browser without a server.
     """
     with running.reporting_errors():
+        require("matplotlib", "plot", "the report's figures")
         mechanism = running.load_mechanism(spec)
         result = running.run_analysis(mechanism, precision, running.progress_reporter())
         from ..analysis.planning import default_poses, plan_motion

@@ -9,6 +9,7 @@ from typing import Any
 import click
 
 from ..errors import InputError
+from ..extras import require
 from ..mechanisms.registry import load_spec
 from . import options, running
 
@@ -138,6 +139,7 @@ def sweep_command(
         check_varies(varies)
         table_format(out)
         if figure_out is not None:
+            require("matplotlib", "plot", "the sweep figure (--figure)")
             several = [v.name for v in varies if len(set(v.values)) > 1]
             if len(several) != 2:
                 raise InputError(

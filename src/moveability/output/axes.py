@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from ..extras import require
 from ..types import Array
 
 if TYPE_CHECKING:
@@ -24,8 +25,8 @@ UNDECIDED = "#BBBBBB"
 
 def pyplot() -> Any:
     """matplotlib's pyplot, imported when a figure is first drawn (the Agg backend
-    unless one was chosen)."""
-    import matplotlib
+    unless one was chosen); a missing ``plot`` extra is one line."""
+    matplotlib = require("matplotlib", "plot", "figures")
 
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,7 +32,7 @@ from ..hypertree.tree import HyperTree, to_coordinates
 if TYPE_CHECKING:
     from ..analysis.result import Analysis
 
-__all__ = ["VTK_HEXAHEDRON", "VTK_QUAD", "export_vtk", "write_vtu"]
+__all__ = ["VTK_HEXAHEDRON", "VTK_QUAD", "export_vtk", "exported_files", "write_vtu"]
 
 #: VTK cell types of a leaf with two and three axes
 VTK_QUAD = 9
@@ -202,3 +202,35 @@ def export_vtk(result: Analysis, directory: str | os.PathLike[str]) -> list[Path
         write_vtu(out / "undecided.vtu", tree, cells, np.zeros(cells.size, dtype=bool), comment)
     )
     return paths
+
+
+def exported_files(result: Analysis, paths: list[Path]) -> list[dict[str, Any]]:
+    """What :func:`export_vtk` wrote, one JSON-ready entry per file.
+
+    Each entry gives the ``path``, the ``region`` id (``None`` for the file of
+    undecided leaves), its number of ``cells``, of ``certified_cells``, and the
+    bounds of the region's measure (``area`` or ``volume``).
+    """
+    measure = result.measure_name
+    files: list[dict[str, Any]] = []
+    for j, region in enumerate(result.regions):
+        certain, possible = result.region_cells(j)
+        files.append(
+            {
+                "path": str(paths[j]),
+                "region": region.id,
+                "cells": int((certain | possible).sum()),
+                "certified_cells": int(certain.sum()),
+                measure: list(region.area),
+            }
+        )
+    files.append(
+        {
+            "path": str(paths[-1]),
+            "region": None,
+            "cells": int((result.tree.status == BOUNDARY).sum()),
+            "certified_cells": 0,
+            measure: [0.0, result.undecided[f"boundary_{measure}"]],
+        }
+    )
+    return files

@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
+from ..extras import require
 from .designs import varied_unit
 from .table import RESULT_COLUMNS, read_table
 
@@ -169,7 +170,7 @@ def plot_sweep_map(
         x, y = map_axes(columns, rows)
     xs, ys, codes, connected = map_grid(columns, rows, x, y)
 
-    import matplotlib
+    matplotlib = require("matplotlib", "plot", "the sweep figure")
 
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt

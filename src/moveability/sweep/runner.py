@@ -29,6 +29,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 from ..errors import InvalidParameterError, MoveabilityError
+from ..extras import require
 from .designs import Vary, check_varies, design_grid, parse_vary
 from .table import SweepTable
 
@@ -287,6 +288,7 @@ def run_designs(
         for values in designs:
             yield run_chunk(spec, names, [values], precision, malloc_fix, resolve)
     else:
+        require("joblib", "sweep", "parallel sweeps (jobs > 1)")
         from joblib import Parallel, delayed
 
         parallel = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")
@@ -312,6 +314,7 @@ def _run_dask(
     malloc_fix: bool,
     resolve: bool = True,
 ) -> Iterator[list[Row]]:
+    require("distributed", "sweep", "sweeps on Dask")
     from distributed import Client, as_completed
 
     try:
@@ -362,6 +365,7 @@ def local_cluster(n_workers: int = 2, malloc_trim: bool = False, **kwargs: Any) 
     **kwargs
         Passed to ``distributed.LocalCluster``.
     """
+    require("distributed", "sweep", "a Dask cluster")
     import dask
     from distributed import LocalCluster
 

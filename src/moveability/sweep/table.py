@@ -26,6 +26,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 from ..errors import InvalidParameterError, Plain
+from ..extras import require
 
 __all__ = [
     "RESULT_COLUMNS",
@@ -84,6 +85,7 @@ def table_format(path: str | os.PathLike[str], name: str = "--out") -> str:
     if suffix == ".csv":
         return "csv"
     if suffix in (".parquet", ".pq"):
+        require("pyarrow", "sweep", "Parquet tables")
         return "parquet"
     raise InvalidParameterError(
         name, "a file name ending in .csv, .parquet or .pq", os.fspath(path)

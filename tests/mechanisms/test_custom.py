@@ -17,7 +17,7 @@ from moveability.limits import JointLimit
 from moveability.mechanisms import FiveBar
 from moveability.mechanisms.custom import CustomMechanism, normalise_custom_spec
 
-EXAMPLE = pathlib.Path(__file__).parent.parent / "examples" / "five-bar-custom.toml"
+EXAMPLE = pathlib.Path(__file__).parents[2] / "examples" / "five-bar-custom.toml"
 PRECISION = 0.5
 
 

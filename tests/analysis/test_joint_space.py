@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from moveability import analyze, load_analysis
-from moveability.analysis.flows import _into_corner
+from moveability.analysis.flows import into_corner
 from moveability.analysis.joint_space import count_in_joint_space, has_dyads
 from moveability.mechanisms import FiveBar, from_spec
 from region_references import (
@@ -171,12 +171,12 @@ def test_direction_into_a_corner():
     # three unit normals of a corner in space whose sum leaves it
     normals = np.array([[1.0, 0.0, 0.0], [-0.9, 0.43588989, 0.0], [-0.9, 0.0, 0.43588989]])
     assert (normals @ normals.sum(axis=0) < 0).any()
-    v = _into_corner(normals[None])[0]
+    v = into_corner(normals[None])[0]
     assert np.allclose(normals @ v, 1.0)
     # in the plane, two normals: the bisector, as their sum
     pair = np.array([[[1.0, 0.0], [0.0, 1.0]]])
-    d = _into_corner(pair)[0]
+    d = into_corner(pair)[0]
     assert np.allclose(d / np.linalg.norm(d), [2**-0.5, 2**-0.5])
     # dependent normals fall back to the sum; inactive rows are zero
     flat = np.array([[[1.0, 0.0], [1.0, 0.0], [0.0, 0.0]]])
-    assert np.allclose(_into_corner(flat)[0], [2.0, 0.0])
+    assert np.allclose(into_corner(flat)[0], [2.0, 0.0])

@@ -286,14 +286,14 @@ def _check_analysis(m: FiveBar, precision: float, rng: np.random.Generator, n_pt
     comps_to_check = []
     for j, r in enumerate(result.regions):
         if r.equals_workspace is False:
-            _, row, u = result._region_nodes[j]
+            row, u = result.regions[j].row, result.regions[j].possible
             comps_to_check.append((row, u))
     if result.n_connected is False:
         comps_to_check += [(row, u) for row in (0, 1) for u in range(g.n_possible[row])]
     for row, u in set(comps_to_check):
         inside = {key for key, comps in possible_of.items() if comps == {(row, u)}}
         touch = (g.possible[row] == u).any(axis=1)
-        witness = np.flatnonzero(result._w_certain & ~touch)
+        witness = np.flatnonzero(result.workspace_cells()[0] & ~touch)
         if not witness.size:
             bad.append(("no witness leaf for a negative answer", row, u))
             continue
