@@ -3,32 +3,73 @@
 The spaces of the analysis (the Cartesian workspace, the joint space and their
 product) are represented by :class:`HyperTree`, a k-dimensional generalized
 octree whose leaves are IN, OUT or BOUNDARY.
+
+The public names below are imported when first used, so that ``import
+moveability`` (and a command that needs little, such as ``moveability
+--version``) does not load numba, scipy and the analysis.
 """
 
-from importlib.metadata import PackageNotFoundError, version
+from __future__ import annotations
 
-from .analysis.planning import default_poses, plan_motion
-from .analysis.result import Analysis, Region, analyze, load_analysis
+import importlib
+from importlib.metadata import PackageNotFoundError, version
+from typing import TYPE_CHECKING, Any
+
 from .errors import (
     IncompatibleTreesError,
+    InputError,
     InvalidParameterError,
+    MissingExtraError,
     MoveabilityError,
     PlanningError,
     ResolutionError,
     SpecError,
 )
-from .hypertree.measurement import leaf_volumes, locate, measure
-from .hypertree.projection import project
-from .hypertree.setops import complement, difference, equals, intersection, union
-from .hypertree.status import BOUNDARY, IN, OUT, Status
-from .hypertree.topology import adjacency, components
-from .hypertree.tree import HyperTree, Leaves, load
-from .mechanisms.registry import load_spec
+
+if TYPE_CHECKING:
+    from .analysis.planning import default_poses, plan_motion
+    from .analysis.result import Analysis, Region, analyze, load_analysis
+    from .hypertree.measurement import leaf_volumes, locate, measure
+    from .hypertree.projection import project
+    from .hypertree.setops import complement, difference, equals, intersection, union
+    from .hypertree.status import BOUNDARY, IN, OUT, Status
+    from .hypertree.topology import adjacency, components
+    from .hypertree.tree import HyperTree, Leaves, load
+    from .mechanisms.registry import from_spec, load_spec
 
 try:
     __version__ = version("moveability")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0.0.0"
+
+#: where each lazily imported public name lives
+_LAZY: dict[str, str] = {
+    **dict.fromkeys(("default_poses", "plan_motion"), "analysis.planning"),
+    **dict.fromkeys(("Analysis", "Region", "analyze", "load_analysis"), "analysis.result"),
+    **dict.fromkeys(("leaf_volumes", "locate", "measure"), "hypertree.measurement"),
+    "project": "hypertree.projection",
+    **dict.fromkeys(
+        ("complement", "difference", "equals", "intersection", "union"), "hypertree.setops"
+    ),
+    **dict.fromkeys(("BOUNDARY", "IN", "OUT", "Status"), "hypertree.status"),
+    **dict.fromkeys(("adjacency", "components"), "hypertree.topology"),
+    **dict.fromkeys(("HyperTree", "Leaves", "load"), "hypertree.tree"),
+    **dict.fromkeys(("from_spec", "load_spec"), "mechanisms.registry"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "BOUNDARY",
@@ -37,8 +78,10 @@ __all__ = [
     "Analysis",
     "HyperTree",
     "IncompatibleTreesError",
+    "InputError",
     "InvalidParameterError",
     "Leaves",
+    "MissingExtraError",
     "MoveabilityError",
     "PlanningError",
     "Region",
@@ -53,6 +96,7 @@ __all__ = [
     "default_poses",
     "difference",
     "equals",
+    "from_spec",
     "intersection",
     "leaf_volumes",
     "load",

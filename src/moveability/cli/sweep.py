@@ -10,7 +10,6 @@ import click
 
 from ..errors import InputError
 from ..extras import require
-from ..mechanisms.registry import load_spec
 from . import options, running
 
 __all__ = ["sweep_command"]
@@ -131,6 +130,7 @@ def sweep_command(
     """
     n_jobs = _check_jobs(jobs, scheduler)
     with running.reporting_errors():
+        from ..mechanisms.registry import load_spec
         from ..sweep import check_varies, parse_vary, run_sweep
         from ..sweep.table import table_format
 
