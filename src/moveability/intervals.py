@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
+from numba import njit, vectorize
 from numpy.typing import ArrayLike, NDArray
 
 from .types import Array
@@ -54,27 +54,71 @@ _TWO_PI = 2.0 * np.pi
 _LIB_ULPS = 4
 
 
+_MAX = float(np.finfo(np.float64).max)
+#: beyond this magnitude a widening away from zero gives the infinity
+_HUGE = _MAX / 2.0
+#: the smallest positive subnormal
+_TINY = 5e-324
+
+
+@vectorize(["float64(float64, float64, float64, boolean)"], cache=True)
+def _widen_down(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
+    """``x`` moved down by ``|x| * rel + tiny``; a zero kept when ``keep_zero``."""
+    if x != x or (keep_zero and x == 0.0):
+        return x
+    if x > _MAX:
+        # +inf: an overflow, the exact value is finite and above; one float below is
+        # the largest, more than one (tiny holds the number of ulps) are further
+        if tiny <= _TINY:
+            return _MAX
+        x = _MAX
+    if x < -_HUGE:
+        return -np.inf
+    return x - (abs(x) * rel + tiny)
+
+
+@vectorize(["float64(float64, float64, float64, boolean)"], cache=True)
+def _widen_up(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
+    """``x`` moved up by ``|x| * rel + tiny``; a zero kept when ``keep_zero``."""
+    if x != x or (keep_zero and x == 0.0):
+        return x
+    if x < -_MAX:
+        if tiny <= _TINY:
+            return -_MAX  # -inf: an overflow
+        x = -_MAX
+    if x > _HUGE:
+        return np.inf
+    return x + (abs(x) * rel + tiny)
+
+
+def _rel(ulps: int) -> float:
+    # x -/+ (|x| * (ulps + 1) * 2**-52 + ulps * 2**-1074), rounded to nearest, lies
+    # at least ``ulps`` floats away from x, and at most 2 * (ulps + 1) + 1: |x| *
+    # 2**-52 is one to two ulps of x, and the product and the sum each round by at
+    # most half an ulp (tests/test_intervals.py compares with repeated nextafter,
+    # subnormals, binade edges and overflows included)
+    return (ulps + 1) * 2.0**-52
+
+
 def _down(x: Array, ulps: int = 1) -> Array:
-    for _ in range(ulps):
-        x = np.nextafter(x, -_INF)
-    return x
+    """A lower bound ``ulps`` floats below ``x`` or a few more, in one compiled pass."""
+    return np.asarray(_widen_down(x, _rel(ulps), ulps * _TINY, False))
 
 
 def _up(x: Array, ulps: int = 1) -> Array:
-    for _ in range(ulps):
-        x = np.nextafter(x, _INF)
-    return x
+    """An upper bound ``ulps`` floats above ``x`` or a few more, in one compiled pass."""
+    return np.asarray(_widen_up(x, _rel(ulps), ulps * _TINY, False))
 
 
 def _down_sum(x: Array) -> Array:
     """A rounded sum or difference widened down; a zero result is exact (with
     gradual underflow a float sum rounds to zero only when it is zero)."""
-    return np.where(x == 0, x, _down(x))
+    return np.asarray(_widen_down(x, _rel(1), _TINY, True))
 
 
 def _up_sum(x: Array) -> Array:
     """A rounded sum or difference widened up; a zero result is exact."""
-    return np.where(x == 0, x, _up(x))
+    return np.asarray(_widen_up(x, _rel(1), _TINY, True))
 
 
 @njit(cache=True, nogil=True)
@@ -184,7 +228,13 @@ class Interval:
 
     def __mul__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
-        shape = np.broadcast_shapes(self.lo.shape, self.hi.shape, o.lo.shape, o.hi.shape)
+        parts = (self.lo, self.hi, o.lo, o.hi)
+        shape = parts[0].shape
+        if all(x.shape == shape for x in parts):
+            # one shape: no broadcast (reshape copies only what is not contiguous)
+            lo, hi = _product_bounds(*(x.reshape(-1) for x in parts))
+            return Interval(lo.reshape(shape), hi.reshape(shape))
+        shape = np.broadcast_shapes(*(x.shape for x in parts))
 
         def flat(x: Array) -> Array:
             # read-only views or copies: the kernel only reads them
@@ -231,13 +281,9 @@ def hull(a: Interval, b: Interval) -> Interval:
 def square(x: IntervalLike) -> Interval:
     """``x ** 2``, tighter than ``x * x`` when ``x`` straddles zero."""
     x = as_interval(x)
-    with np.errstate(over="ignore"):
-        a, b = x.lo * x.lo, x.hi * x.hi
+    xx = x * x
     straddles = (x.lo <= 0) & (x.hi >= 0)
-    lo = np.where(straddles, 0.0, _down(np.minimum(a, b)))
-    # the square of an exact zero is exact
-    hi = np.where((x.lo == 0) & (x.hi == 0), 0.0, _up(np.maximum(a, b)))
-    return Interval(np.maximum(lo, 0.0), hi)
+    return Interval(np.where(straddles, 0.0, np.maximum(xx.lo, 0.0)), xx.hi)
 
 
 def sqrt(x: IntervalLike) -> Interval:

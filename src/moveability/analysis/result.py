@@ -206,8 +206,20 @@ def analyze(
     resolve = bool(resolve) and supports_flows(mechanism)
     extra = min(int(resolve_levels), (MAX_KEY_BITS - sum(depths)) // len(depths)) if resolve else 0
 
+    # the sheet tables of the cells that may end as leaves: the analysis reuses
+    # them rather than classifying the final leaves again
+    kept: list[tuple[NDArray[np.float64], NDArray[np.float64], SheetTable]] = []
+
     def classify(cell_lo: NDArray[np.float64], cell_hi: NDArray[np.float64]) -> NDArray[np.uint8]:
-        return classify_sheets(mechanism, cell_lo, cell_hi).statuses()
+        table = classify_sheets(mechanism, cell_lo, cell_hi)
+        statuses = table.statuses()
+        if kept:
+            # a later level came: the undecided cells of the last one were split
+            last_lo, last_hi, last = kept[-1]
+            stay = np.flatnonzero(last.statuses() != BOUNDARY)
+            kept[-1] = (last_lo[stay], last_hi[stay], last.take(stay))
+        kept.append((cell_lo, cell_hi, table))
+        return statuses
 
     n_levels = max(depths)
 
@@ -242,7 +254,12 @@ def analyze(
     # two dyads: the count is also proved in the joint space (see moveability.analysis.joint_space)
     joint = count_in_joint_space(mechanism) if resolve and not generalized_aspects else None
     result = Analysis(
-        mechanism, _as_given(eps), tree, generalized_aspects=generalized_aspects, joint_count=joint
+        mechanism,
+        _as_given(eps),
+        tree,
+        generalized_aspects=generalized_aspects,
+        table=_leaf_table(mechanism, tree, kept),
+        joint_count=joint,
     )
     if extra:
         budget = len(tree) + max(int(resolve_growth * len(tree)), 1 << 15)
@@ -310,6 +327,35 @@ def resolve_analysis(
             flows_of=(result, old_index),
             joint_count=result.joint_count,
         )
+
+
+def _leaf_table(
+    mechanism: Mechanism,
+    tree: HyperTree,
+    kept: list[tuple[NDArray[np.float64], NDArray[np.float64], SheetTable]],
+) -> SheetTable:
+    """The sheet table of the tree's leaves, from the tables of the cells classified
+    while it was built (a cell is a leaf when its box is one). A leaf no table
+    holds (none, unless the build changes) is classified here."""
+    leaves = tree.leaves()
+    n = len(tree)
+    source = np.full(n, -1, dtype=np.intp)
+    tables = [table for _, _, table in kept]
+    offsets = np.cumsum([0] + [len(t.status) for t in tables])
+    for c, (cell_lo, cell_hi, _) in enumerate(kept):
+        if not len(cell_lo):
+            continue
+        _, leaf = locate(tree, 0.5 * (cell_lo + cell_hi))
+        ok = leaf >= 0
+        ok[ok] = (leaves.lo[leaf[ok]] == cell_lo[ok]).all(axis=1) & (
+            leaves.hi[leaf[ok]] == cell_hi[ok]
+        ).all(axis=1)
+        source[leaf[ok]] = offsets[c] + np.flatnonzero(ok)
+    missing = np.flatnonzero(source < 0)
+    if missing.size:
+        tables.append(classify_sheets(mechanism, leaves.lo[missing], leaves.hi[missing]))
+        source[missing] = offsets[-1] + np.arange(missing.size)
+    return stack_tables(tables).take(source)
 
 
 def _split(
