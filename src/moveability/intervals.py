@@ -61,8 +61,8 @@ _HUGE = _MAX / 2.0
 _TINY = 5e-324
 
 
-@vectorize(["float64(float64, float64, float64, boolean)"], cache=True)
-def _widen_down(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
+@njit(cache=True, nogil=True)
+def _below(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
     """``x`` moved down by ``|x| * rel + tiny``; a zero kept when ``keep_zero``."""
     if x != x or (keep_zero and x == 0.0):
         return x
@@ -77,18 +77,39 @@ def _widen_down(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  #
     return x - (abs(x) * rel + tiny)
 
 
+@njit(cache=True, nogil=True)
+def _above(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
+    """``x`` moved up by ``|x| * rel + tiny``; a zero kept when ``keep_zero``."""
+    return -_below(-x, rel, tiny, keep_zero)
+
+
+@vectorize(["float64(float64, float64, float64, boolean)"], cache=True)
+def _widen_down(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
+    return _below(x, rel, tiny, keep_zero)
+
+
 @vectorize(["float64(float64, float64, float64, boolean)"], cache=True)
 def _widen_up(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
-    """``x`` moved up by ``|x| * rel + tiny``; a zero kept when ``keep_zero``."""
-    if x != x or (keep_zero and x == 0.0):
-        return x
-    if x < -_MAX:
-        if tiny <= _TINY:
-            return -_MAX  # -inf: an overflow
-        x = -_MAX
-    if x > _HUGE:
-        return np.inf
-    return x + (abs(x) * rel + tiny)
+    return _above(x, rel, tiny, keep_zero)
+
+
+@vectorize(["float64(float64, float64)"], cache=True)
+def _add_down(a: float, b: float) -> float:  # pragma: no cover - compiled
+    """``a + b`` widened down by an ulp or a few; a zero sum is exact."""
+    return _below(a + b, 2.0**-51, _TINY, True)
+
+
+@vectorize(["float64(float64, float64)"], cache=True)
+def _add_up(a: float, b: float) -> float:  # pragma: no cover - compiled
+    """``a + b`` widened up by an ulp or a few; a zero sum is exact."""
+    return _above(a + b, 2.0**-51, _TINY, True)
+
+
+# the plain numpy ufuncs behind numba's: no dispatch in Python at each call
+_WIDEN_DOWN = _widen_down.ufunc
+_WIDEN_UP = _widen_up.ufunc
+_ADD_DOWN = _add_down.ufunc
+_ADD_UP = _add_up.ufunc
 
 
 def _rel(ulps: int) -> float:
@@ -100,32 +121,35 @@ def _rel(ulps: int) -> float:
     return (ulps + 1) * 2.0**-52
 
 
+_REL_1 = _rel(1)
+
+
 def _down(x: Array, ulps: int = 1) -> Array:
     """A lower bound ``ulps`` floats below ``x`` or a few more, in one compiled pass."""
-    return np.asarray(_widen_down(x, _rel(ulps), ulps * _TINY, False))
+    return np.asarray(_WIDEN_DOWN(x, _rel(ulps), ulps * _TINY, False))
 
 
 def _up(x: Array, ulps: int = 1) -> Array:
     """An upper bound ``ulps`` floats above ``x`` or a few more, in one compiled pass."""
-    return np.asarray(_widen_up(x, _rel(ulps), ulps * _TINY, False))
+    return np.asarray(_WIDEN_UP(x, _rel(ulps), ulps * _TINY, False))
 
 
 def _down_sum(x: Array) -> Array:
     """A rounded sum or difference widened down; a zero result is exact (with
     gradual underflow a float sum rounds to zero only when it is zero)."""
-    return np.asarray(_widen_down(x, _rel(1), _TINY, True))
+    return np.asarray(_WIDEN_DOWN(x, _rel(1), _TINY, True))
 
 
 def _up_sum(x: Array) -> Array:
     """A rounded sum or difference widened up; a zero result is exact."""
-    return np.asarray(_widen_up(x, _rel(1), _TINY, True))
+    return np.asarray(_WIDEN_UP(x, _rel(1), _TINY, True))
 
 
 @njit(cache=True, nogil=True)
 def _product_bounds(
     a_lo: Array, a_hi: Array, b_lo: Array, b_hi: Array
 ) -> tuple[Array, Array]:  # pragma: no cover - compiled
-    """Bounds of ``[a_lo, a_hi] * [b_lo, b_hi]``, widened outward by one ulp.
+    """Bounds of ``[a_lo, a_hi] * [b_lo, b_hi]``, widened outward by one ulp (or a few).
 
     The four bound products give the range; ``0 * inf`` (nan) is taken as 0, the
     product of a zero bound. A zero bound is exact, and kept, unless a zero
@@ -149,8 +173,8 @@ def _product_bounds(
                 high = p
             if p == 0.0 and x != 0.0 and y != 0.0:
                 underflow = True
-        out_lo[i] = 0.0 if (low == 0.0 and not underflow) else np.nextafter(low, -np.inf)
-        out_hi[i] = 0.0 if (high == 0.0 and not underflow) else np.nextafter(high, np.inf)
+        out_lo[i] = 0.0 if (low == 0.0 and not underflow) else _below(low, _REL_1, _TINY, False)
+        out_hi[i] = 0.0 if (high == 0.0 and not underflow) else _above(high, _REL_1, _TINY, False)
     return out_lo, out_hi
 
 
@@ -214,14 +238,14 @@ class Interval:
     def __add__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
         with np.errstate(over="ignore"):
-            return Interval(_down_sum(self.lo + o.lo), _up_sum(self.hi + o.hi))
+            return Interval(_ADD_DOWN(self.lo, o.lo), _ADD_UP(self.hi, o.hi))
 
     __radd__ = __add__
 
     def __sub__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
         with np.errstate(over="ignore"):
-            return Interval(_down_sum(self.lo - o.hi), _up_sum(self.hi - o.lo))
+            return Interval(_ADD_DOWN(self.lo, -o.hi), _ADD_UP(self.hi, -o.lo))
 
     def __rsub__(self, other: IntervalLike) -> Interval:
         return as_interval(other) - self
@@ -295,6 +319,23 @@ def sqrt(x: IntervalLike) -> Interval:
     return Interval(np.maximum(lo, 0.0), hi)
 
 
+@njit(cache=True, nogil=True)
+def _holds_angle(lo: float, hi: float, phase: float) -> bool:  # pragma: no cover - compiled
+    """Whether ``[lo, hi]`` may contain an angle ``phase + 2 k pi`` (conservative)."""
+    # the quotient's rounding error grows with |x|: the margin is relative
+    tol = 1e-12 * max(1.0, max(abs(lo), abs(hi)))
+    k = np.ceil((lo - tol - phase) / _TWO_PI)
+    return phase + k * _TWO_PI <= hi + tol
+
+
+@vectorize(["boolean(float64, float64, float64)"], cache=True)
+def _may_contain(lo: float, hi: float, phase: float) -> bool:  # pragma: no cover - compiled
+    return _holds_angle(lo, hi, phase)
+
+
+_MAY_CONTAIN = _may_contain.ufunc
+
+
 def may_contain_angle(x: Interval, phase: float | NDArray[np.float64]) -> NDArray[np.bool_]:
     """Whether each ``[lo, hi]`` may contain an angle ``phase + 2 k pi`` (conservative).
 
@@ -303,42 +344,67 @@ def may_contain_angle(x: Interval, phase: float | NDArray[np.float64]) -> NDArra
     >>> may_contain_angle(Interval([6.0, 0.5], [6.5, 1.0]), 0.0).tolist()
     [True, False]
     """
-    with np.errstate(over="ignore", invalid="ignore"):
-        # the quotient's rounding error grows with |x|: the margin is relative
-        tol = 1e-12 * np.maximum(1.0, np.maximum(np.abs(x.lo), np.abs(x.hi)))
-        k = np.ceil((x.lo - tol - phase) / _TWO_PI)
-        first = phase + k * _TWO_PI
-        return first <= x.hi + tol
+    return np.asarray(_MAY_CONTAIN(x.lo, x.hi, phase), dtype=bool)
+
+
+@njit(cache=True, nogil=True)
+def _trig_bounds(
+    lo: Array, hi: Array, sine: bool, rel: float, tiny: float
+) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    """Range of ``sin`` (or ``cos``) over each ``[lo[i], hi[i]]``: the values at the
+    ends widened outwards, or -1 / 1 where the interval may hold a minimum /
+    maximum (or spans a turn); NaN where an end gives NaN and no extremum."""
+    n = lo.size
+    out_lo = np.empty(n)
+    out_hi = np.empty(n)
+    top = 0.5 * np.pi if sine else 0.0
+    bottom = -0.5 * np.pi if sine else np.pi
+    for i in range(n):
+        a = lo[i]
+        b = hi[i]
+        fa = np.sin(a) if sine else np.cos(a)
+        fb = np.sin(b) if sine else np.cos(b)
+        if fa != fa or fb != fb:
+            low = np.nan
+            high = np.nan
+        else:
+            low = min(fa, fb)
+            high = max(fa, fb)
+        wide = b - a >= _TWO_PI
+        if wide or _holds_angle(a, b, bottom):
+            low = -1.0
+        else:
+            low = _below(low, rel, tiny, False)
+        if wide or _holds_angle(a, b, top):
+            high = 1.0
+        else:
+            high = _above(high, rel, tiny, False)
+        out_lo[i] = low if low != low else max(low, -1.0)
+        out_hi[i] = high if high != high else min(high, 1.0)
+    return out_lo, out_hi
+
+
+def _trig(x: Interval, sine: bool) -> Interval:
+    lo, hi = np.broadcast_arrays(x.lo, x.hi)
+    shape = lo.shape
+    out_lo, out_hi = _trig_bounds(
+        np.ascontiguousarray(lo).reshape(-1),
+        np.ascontiguousarray(hi).reshape(-1),
+        sine,
+        _rel(_LIB_ULPS),
+        _LIB_ULPS * _TINY,
+    )
+    return Interval(out_lo.reshape(shape), out_hi.reshape(shape))
 
 
 def cos(x: IntervalLike) -> Interval:
     """Cosine: exact range of ``cos`` over each interval, widened outwards."""
-    x = as_interval(x)
-    c_lo, c_hi = np.cos(x.lo), np.cos(x.hi)
-    lo = np.minimum(c_lo, c_hi)
-    hi = np.maximum(c_lo, c_hi)
-    with np.errstate(over="ignore", invalid="ignore"):
-        wide = (x.hi - x.lo) >= _TWO_PI
-    has_max = wide | may_contain_angle(x, 0.0)
-    has_min = wide | may_contain_angle(x, np.pi)
-    lo = np.where(has_min, -1.0, _down(lo, _LIB_ULPS))
-    hi = np.where(has_max, 1.0, _up(hi, _LIB_ULPS))
-    return Interval(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
+    return _trig(as_interval(x), sine=False)
 
 
 def sin(x: IntervalLike) -> Interval:
     """Sine: exact range of ``sin`` over each interval, widened outwards."""
-    x = as_interval(x)
-    s_lo, s_hi = np.sin(x.lo), np.sin(x.hi)
-    lo = np.minimum(s_lo, s_hi)
-    hi = np.maximum(s_lo, s_hi)
-    with np.errstate(over="ignore", invalid="ignore"):
-        wide = (x.hi - x.lo) >= _TWO_PI
-    has_max = wide | may_contain_angle(x, 0.5 * np.pi)
-    has_min = wide | may_contain_angle(x, -0.5 * np.pi)
-    lo = np.where(has_min, -1.0, _down(lo, _LIB_ULPS))
-    hi = np.where(has_max, 1.0, _up(hi, _LIB_ULPS))
-    return Interval(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
+    return _trig(as_interval(x), sine=True)
 
 
 def arccos(x: IntervalLike) -> Interval:
