@@ -39,6 +39,8 @@ __all__ = [
     "hull",
     "log",
     "may_contain_angle",
+    "next_above",
+    "next_below",
     "power",
     "rational",
     "sin",
@@ -122,6 +124,25 @@ def _rel(ulps: int) -> float:
 
 
 _REL_1 = _rel(1)
+
+
+@njit(cache=True, nogil=True)
+def next_below(x: float) -> float:  # pragma: no cover - compiled
+    """A float at least one float below ``x`` (a few at most): the outward rounding of
+    a lower bound, for compiled code.
+
+    Examples
+    --------
+    >>> next_below(1.0) < 1.0 and next_below(0.0) < 0.0
+    True
+    """
+    return _below(x, _REL_1, _TINY, False)
+
+
+@njit(cache=True, nogil=True)
+def next_above(x: float) -> float:  # pragma: no cover - compiled
+    """A float at least one float above ``x`` (a few at most)."""
+    return _above(x, _REL_1, _TINY, False)
 
 
 def _down(x: Array, ulps: int = 1) -> Array:

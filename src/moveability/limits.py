@@ -5,10 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit, vectorize
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import InvalidParameterError
-from .intervals import Interval
+from .intervals import Interval, next_below
 
 __all__ = ["INSIDE", "OUTSIDE", "STRADDLES", "JointLimit", "classify_angles"]
 
@@ -168,31 +169,37 @@ def classify_angles(angles: Interval, lo: ArrayLike, hi: ArrayLike) -> NDArray[n
     >>> classify_angles(Interval([0.1, 6.4], [0.2, 6.5]), [0.0, 0.0], [1.0, 0.1]).tolist()
     [1, 2]
     """
-    lo_b = np.asarray(lo, dtype=np.float64)
-    hi_b = np.asarray(hi, dtype=np.float64)
-    width = angles.hi - angles.lo
+    with np.errstate(over="ignore", invalid="ignore"):
+        return np.asarray(_CLASSIFY(angles.lo, angles.hi, lo, hi), dtype=np.uint8)
+
+
+@njit(cache=True, nogil=True)
+def _shifted(a: float, turns: float) -> float:  # pragma: no cover - compiled
+    """An enclosure's bound ``a`` moved ``turns`` turns: ``turns * 2 pi`` is enclosed in
+    ``[turns * 2pi_lo, turns * 2pi_hi]`` and every rounding is widened outwards
+    (down for a lower bound; an upper bound calls it on ``-a``, ``-turns``)."""
+    shift = turns * _TWO_PI_LO if turns >= 0 else turns * _TWO_PI_HI
+    return next_below(a + next_below(shift))
+
+
+@vectorize(["uint8(float64, float64, float64, float64)"], cache=True)
+def _classify(a_lo: float, a_hi: float, lo: float, hi: float) -> int:  # pragma: no cover
+    width = a_hi - a_lo
     # k turns bring the interval near [lo, lo + 2 pi); the tests below are sound for
     # any k, the choice only makes them sharp
-    k = np.floor((angles.lo - lo_b) / _TWO_PI)
-    k = np.where(np.isfinite(k), -k, 0.0)
-
-    def shifted(turns: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        # the shift by `turns` turns is enclosed in [turns * 2pi_lo, turns * 2pi_hi]
-        # (the products are rounded too: one more step outwards)
-        s_lo = np.nextafter(np.where(turns >= 0, turns * _TWO_PI_LO, turns * _TWO_PI_HI), -np.inf)
-        s_hi = np.nextafter(np.where(turns >= 0, turns * _TWO_PI_HI, turns * _TWO_PI_LO), np.inf)
-        return (
-            np.nextafter(angles.lo + s_lo, -np.inf),
-            np.nextafter(angles.hi + s_hi, np.inf),
-        )
-
-    a_lo, a_hi = shifted(k)
-    inside = (a_lo >= lo_b) & (a_hi <= hi_b) & (width < _TWO_PI_LO)
-    outside = width < _TWO_PI_LO
+    k = np.floor((a_lo - lo) / _TWO_PI)
+    k = -k if np.isfinite(k) else 0.0
+    narrow = width < _TWO_PI_LO
+    if narrow and _shifted(a_lo, k) >= lo and -_shifted(-a_hi, -k) <= hi:
+        return INSIDE
+    if not narrow:
+        return STRADDLES
     for j in (-2.0, -1.0, 0.0, 1.0, 2.0):
-        t_lo, t_hi = shifted(k + j)
-        outside &= (t_lo > hi_b) | (t_hi < lo_b)
-    out = np.full(np.broadcast(angles.lo, lo_b, hi_b).shape, STRADDLES, dtype=np.uint8)
-    out[inside] = INSIDE
-    out[outside & ~inside] = OUTSIDE
-    return out
+        t_lo = _shifted(a_lo, k + j)
+        t_hi = -_shifted(-a_hi, -(k + j))
+        if not (t_lo > hi or t_hi < lo):
+            return STRADDLES
+    return OUTSIDE
+
+
+_CLASSIFY = _classify.ufunc
