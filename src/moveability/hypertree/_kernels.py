@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from .keys import KeyLayout
 
-__all__ = ["label_leaves"]
+__all__ = ["adjacent_pairs", "label_leaves"]
 
 
 @njit(cache=True, nogil=True)
@@ -62,6 +62,47 @@ def _gallop(keys: NDArray[np.uint64], target: np.uint64, start: int) -> int:  # 
 
 
 @njit(cache=True, nogil=True)
+def _neighbour_key(
+    key: np.uint64,
+    level: np.int64,
+    direction: NDArray[np.int8],
+    max_depth: NDArray[np.int64],
+    masks: NDArray[np.uint64],
+    positions: NDArray[np.int64],
+    periodic: NDArray[np.bool_],
+) -> tuple[np.uint64, bool]:  # pragma: no cover - compiled
+    """The key of the point just beyond a leaf in one probe direction (its upper
+    side by the leaf's size, its lower side by one unit), and whether that point
+    is in the box (across periodic axes it always is)."""
+    one = np.uint64(1)
+    for axis in range(max_depth.size):
+        step = direction[axis]
+        if step == 0:
+            continue
+        depth = max_depth[axis]
+        cell_depth = level if level < depth else depth
+        if (cell_depth == 0 and step > 0) or depth == 0:
+            # the cell spans the whole axis: it meets only itself across it
+            if not periodic[axis]:
+                return key, False
+            continue
+        mask = masks[axis]
+        x = key & mask
+        if step > 0:
+            dil = one << np.uint64(positions[axis, depth - cell_depth])
+            moved = ((x | ~mask) + dil) & mask
+            wrapped = moved < x
+        else:
+            dil = one << np.uint64(positions[axis, 0])
+            moved = (x - dil) & mask
+            wrapped = moved > x
+        if wrapped and not periodic[axis]:
+            return key, False
+        key = (key & ~mask) | moved
+    return key, True
+
+
+@njit(cache=True, nogil=True)
 def _label(
     keys: NDArray[np.uint64],
     levels: NDArray[np.uint8],
@@ -73,44 +114,17 @@ def _label(
     directions: NDArray[np.int8],
 ) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
     n = keys.size
-    k = max_depth.size
     n_dir = directions.shape[0]
     parent = np.arange(n)
     last = np.zeros(n_dir, dtype=np.int64)
-    one = np.uint64(1)
     for i in range(n):
         if not chosen[i]:
             continue
         level = np.int64(levels[i])
         for d in range(n_dir):
-            key = keys[i]
-            inside = True
-            for axis in range(k):
-                step = directions[d, axis]
-                if step == 0:
-                    continue
-                depth = max_depth[axis]
-                cell_depth = level if level < depth else depth
-                if (cell_depth == 0 and step > 0) or depth == 0:
-                    # the cell spans the whole axis: it meets only itself across it
-                    if not periodic[axis]:
-                        inside = False
-                        break
-                    continue
-                mask = masks[axis]
-                x = key & mask
-                if step > 0:
-                    dil = one << np.uint64(positions[axis, depth - cell_depth])
-                    moved = ((x | ~mask) + dil) & mask
-                    wrapped = moved < x
-                else:
-                    dil = one << np.uint64(positions[axis, 0])
-                    moved = (x - dil) & mask
-                    wrapped = moved > x
-                if wrapped and not periodic[axis]:
-                    inside = False
-                    break
-                key = (key & ~mask) | moved
+            key, inside = _neighbour_key(
+                keys[i], level, directions[d], max_depth, masks, positions, periodic
+            )
             if not inside:
                 continue
             j = _gallop(keys, key, last[d])
@@ -137,6 +151,135 @@ def _label(
     return labels, count
 
 
+@njit(cache=True, nogil=True)
+def _pairs(
+    keys: NDArray[np.uint64],
+    levels: NDArray[np.uint8],
+    chosen: NDArray[np.bool_],
+    max_depth: NDArray[np.int64],
+    masks: NDArray[np.uint64],
+    positions: NDArray[np.int64],
+    periodic: NDArray[np.bool_],
+    directions: NDArray[np.int8],
+    fill: bool,
+    counts: NDArray[np.int64],
+    out_a: NDArray[np.int64],
+    out_b: NDArray[np.int64],
+) -> None:  # pragma: no cover - compiled
+    """Adjacent pairs of chosen leaves, each written once, by its finer leaf.
+
+    A leaf's probe in the direction of an adjacent leaf at least as large lands
+    in it (the two are dyadic cells: the finer one's extent along the other
+    axes lies within the larger one's), so every pair is found from its finer
+    leaf; a pair of leaves of one level, found from both, is kept from the
+    lower index. Without ``fill`` the pairs of each leaf are counted into
+    ``counts``; with it they are written from the offsets ``counts`` holds
+    (then the number written)."""
+    n = keys.size
+    n_dir = directions.shape[0]
+    last = np.zeros(n_dir, dtype=np.int64)
+    found = np.empty(n_dir, dtype=np.int64)
+    for i in range(n):
+        if not chosen[i]:
+            continue
+        level = np.int64(levels[i])
+        m = 0
+        for d in range(n_dir):
+            key, inside = _neighbour_key(
+                keys[i], level, directions[d], max_depth, masks, positions, periodic
+            )
+            if not inside:
+                continue
+            j = _gallop(keys, key, last[d])
+            last[d] = j
+            if j == i or not chosen[j]:
+                continue
+            other = np.int64(levels[j])
+            if other > level or (other == level and j < i):
+                continue  # written from j
+            seen = False
+            for t in range(m):
+                if found[t] == j:
+                    seen = True
+                    break
+            if not seen:
+                found[m] = j
+                m += 1
+        if fill:
+            start = counts[i]
+            for t in range(m):
+                out_a[start + t] = i
+                out_b[start + t] = found[t]
+        else:
+            counts[i] = m
+
+
+def adjacent_pairs(
+    keys: NDArray[np.uint64],
+    levels: NDArray[np.uint8],
+    chosen: NDArray[np.bool_],
+    layout: KeyLayout,
+    periodic: tuple[int, ...],
+    directions: NDArray[np.int8],
+) -> NDArray[np.int64]:
+    """Adjacent pairs of chosen leaves, ``(m, 2)`` leaf indices ``i < j`` in sorted order."""
+    args = _layout_arrays(layout, periodic)
+    n = keys.size
+    counts = np.zeros(n, dtype=np.int64)
+    empty = np.zeros(0, dtype=np.int64)
+    _pairs(keys, levels, chosen, *args, directions, False, counts, empty, empty)
+    offsets = np.zeros(n, dtype=np.int64)
+    np.cumsum(counts[:-1], out=offsets[1:])
+    total = int(counts.sum())
+    a = np.empty(total, dtype=np.int64)
+    b = np.empty(total, dtype=np.int64)
+    _pairs(keys, levels, chosen, *args, directions, True, offsets, a, b)
+    return _sorted_pairs(a, b, n)
+
+
+@njit(cache=True, nogil=True)
+def _sorted_pairs(
+    a: NDArray[np.int64], b: NDArray[np.int64], n: int
+) -> NDArray[np.int64]:  # pragma: no cover - compiled
+    """The pairs ``(min, max)`` in sorted order: counted by their first leaf, then each
+    leaf's few partners sorted in place (insertion sort)."""
+    m = a.size
+    start = np.zeros(n + 1, dtype=np.int64)
+    for t in range(m):
+        start[min(a[t], b[t]) + 1] += 1
+    for i in range(n):
+        start[i + 1] += start[i]
+    out = np.empty((m, 2), dtype=np.int64)
+    fill = start[:-1].copy()
+    for t in range(m):
+        lo = min(a[t], b[t])
+        out[fill[lo], 0] = lo
+        out[fill[lo], 1] = max(a[t], b[t])
+        fill[lo] += 1
+    for i in range(n):
+        for u in range(start[i] + 1, start[i + 1]):
+            value = out[u, 1]
+            v = u - 1
+            while v >= start[i] and out[v, 1] > value:
+                out[v + 1, 1] = out[v, 1]
+                v -= 1
+            out[v + 1, 1] = value
+    return out
+
+
+def _layout_arrays(
+    layout: KeyLayout, periodic: tuple[int, ...]
+) -> tuple[NDArray[np.int64], NDArray[np.uint64], NDArray[np.int64], NDArray[np.bool_]]:
+    periodic_mask = np.zeros(layout.ndim, dtype=bool)
+    periodic_mask[list(periodic)] = True
+    return (
+        np.asarray(layout.max_depth, dtype=np.int64),
+        np.array(layout.masks, dtype=np.uint64),
+        layout.position_table,
+        periodic_mask,
+    )
+
+
 def label_leaves(
     keys: NDArray[np.uint64],
     levels: NDArray[np.uint8],
@@ -146,19 +289,5 @@ def label_leaves(
     directions: NDArray[np.int8],
 ) -> tuple[NDArray[np.int64], int]:
     """Component labels of the chosen leaves (numbered by first leaf), and their count."""
-    k = layout.ndim
-    positions = layout.position_table
-    masks = np.array(layout.masks, dtype=np.uint64)
-    periodic_mask = np.zeros(k, dtype=bool)
-    periodic_mask[list(periodic)] = True
-    labels, count = _label(
-        keys,
-        levels,
-        chosen,
-        np.asarray(layout.max_depth, dtype=np.int64),
-        masks,
-        positions,
-        periodic_mask,
-        directions,
-    )
+    labels, count = _label(keys, levels, chosen, *_layout_arrays(layout, periodic), directions)
     return labels, int(count)

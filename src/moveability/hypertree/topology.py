@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 from ..types import Array
-from ._kernels import label_leaves
+from ._kernels import adjacent_pairs, label_leaves
 from .status import IN, status_mask
 from .tree import HyperTree, to_coordinates
 
@@ -55,33 +55,6 @@ def _check_connectivity(tree: HyperTree, connectivity: int) -> int:
     return int(connectivity)
 
 
-def _probe_pairs(
-    tree: HyperTree, sources: NDArray[np.intp], connectivity: int
-) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
-    """All (source, leaf) pairs found by probing from ``sources`` (with repeats)."""
-    layout = tree.layout
-    keys0 = tree.keys[sources]
-    sizes = layout.cell_sizes(tree.levels[sources])
-    periodic = set(tree.periodic)
-    src_parts, dst_parts = [], []
-    for d in directions(tree.ndim, connectivity):
-        keys = keys0
-        inside = np.ones(keys.size, dtype=bool)
-        for axis in np.flatnonzero(d):
-            if d[axis] > 0:
-                keys, ok = layout.shift(keys, int(axis), sizes[:, axis], +1, axis in periodic)
-            else:
-                keys, ok = layout.shift(keys, int(axis), 1, -1, axis in periodic)
-            inside &= ok
-        hit = np.searchsorted(tree.keys, keys[inside], side="right") - 1
-        src_parts.append(sources[inside])
-        dst_parts.append(hit)
-    if not src_parts:
-        empty = np.zeros(0, dtype=np.intp)
-        return empty, empty
-    return np.concatenate(src_parts), np.concatenate(dst_parts)
-
-
 def adjacency(
     tree: HyperTree, *, status: int | None = None, connectivity: int = 1
 ) -> NDArray[np.intp]:
@@ -98,8 +71,9 @@ def adjacency(
 
     Notes
     -----
-    ``O(n D log n)`` for ``n`` leaves and ``D`` probe directions
-    (``2k`` for face adjacency).
+    ``O(n D log n)`` for ``n`` leaves and ``D`` probe directions (``2k`` for
+    face adjacency), in a compiled kernel; each pair is written once, by its
+    finer leaf, so no list of repeated pairs is sorted.
 
     Examples
     --------
@@ -115,16 +89,10 @@ def adjacency(
     chosen = (
         np.ones(len(tree), dtype=bool) if status is None else (status_mask(status)[tree.status])
     )
-    src, dst = _probe_pairs(tree, np.flatnonzero(chosen), c)
-    keep = chosen[dst] & (src != dst)
-    lo = np.minimum(src, dst)[keep].astype(np.int64)
-    hi = np.maximum(src, dst)[keep].astype(np.int64)
-    # one integer per pair, so that duplicates go in a 1-D sort
-    n = max(len(tree), 1)
-    packed = np.sort(lo * n + hi)
-    if packed.size:
-        packed = packed[np.r_[True, packed[1:] != packed[:-1]]]
-    return np.stack([packed // n, packed % n], axis=1).astype(np.intp)
+    pairs = adjacent_pairs(
+        tree.keys, tree.levels, chosen, tree.layout, tree.periodic, directions(tree.ndim, c)
+    )
+    return pairs.astype(np.intp)
 
 
 def components(
