@@ -29,6 +29,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_mechanisms.py
 	$(PY) benchmarks/bench_sweep.py
 	$(PY) benchmarks/bench_counts.py
+	$(PY) benchmarks/bench_speed.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache .hypothesis

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit, vectorize
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from .types import Array
@@ -36,6 +36,7 @@ __all__ = [
     "arctan2",
     "cos",
     "exp",
+    "flat_arrays",
     "hull",
     "log",
     "may_contain_angle",
@@ -85,33 +86,39 @@ def _above(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # prag
     return -_below(-x, rel, tiny, keep_zero)
 
 
-@vectorize(["float64(float64, float64, float64, boolean)"], cache=True)
-def _widen_down(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
-    return _below(x, rel, tiny, keep_zero)
+@njit(cache=True, nogil=True)
+def _widen(
+    x: Array, rel: float, tiny: float, keep_zero: bool, up: bool
+) -> Array:  # pragma: no cover - compiled
+    """:func:`_below` (or :func:`_above`) of each element of a flat array."""
+    out = np.empty_like(x)
+    for i in range(x.size):
+        out[i] = _above(x[i], rel, tiny, keep_zero) if up else _below(x[i], rel, tiny, keep_zero)
+    return out
 
 
-@vectorize(["float64(float64, float64, float64, boolean)"], cache=True)
-def _widen_up(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
-    return _above(x, rel, tiny, keep_zero)
+@njit(cache=True, nogil=True)
+def _sum_bounds(
+    a: Array, b: Array, up: bool
+) -> Array:  # pragma: no cover - compiled
+    """``a + b`` widened down (or up) by an ulp or a few, element by element of two flat
+    arrays of one size; a zero sum is exact."""
+    out = np.empty_like(a)
+    for i in range(a.size):
+        s = a[i] + b[i]
+        out[i] = _above(s, _REL_1, _TINY, True) if up else _below(s, _REL_1, _TINY, True)
+    return out
 
 
-@vectorize(["float64(float64, float64)"], cache=True)
-def _add_down(a: float, b: float) -> float:  # pragma: no cover - compiled
-    """``a + b`` widened down by an ulp or a few; a zero sum is exact."""
-    return _below(a + b, 2.0**-51, _TINY, True)
-
-
-@vectorize(["float64(float64, float64)"], cache=True)
-def _add_up(a: float, b: float) -> float:  # pragma: no cover - compiled
-    """``a + b`` widened up by an ulp or a few; a zero sum is exact."""
-    return _above(a + b, 2.0**-51, _TINY, True)
-
-
-# the plain numpy ufuncs behind numba's: no dispatch in Python at each call
-_WIDEN_DOWN = _widen_down.ufunc
-_WIDEN_UP = _widen_up.ufunc
-_ADD_DOWN = _add_down.ufunc
-_ADD_UP = _add_up.ufunc
+def flat_arrays(*arrays: ArrayLike) -> tuple[tuple[int, ...], list[Array]]:
+    """The arrays broadcast together, as flat contiguous float arrays, and their shape:
+    what a compiled loop takes (no copy for contiguous arrays of one shape)."""
+    parts = [np.asarray(a, dtype=np.float64) for a in arrays]
+    shape = parts[0].shape
+    if any(a.shape != shape for a in parts):
+        shape = np.broadcast_shapes(*(a.shape for a in parts))
+        parts = [a if a.shape == shape else np.broadcast_to(a, shape) for a in parts]
+    return shape, [np.ascontiguousarray(a).reshape(-1) for a in parts]
 
 
 def _rel(ulps: int) -> float:
@@ -147,23 +154,27 @@ def next_above(x: float) -> float:  # pragma: no cover - compiled
 
 def _down(x: Array, ulps: int = 1) -> Array:
     """A lower bound ``ulps`` floats below ``x`` or a few more, in one compiled pass."""
-    return np.asarray(_WIDEN_DOWN(x, _rel(ulps), ulps * _TINY, False))
+    shape, (flat,) = flat_arrays(x)
+    return _widen(flat, _rel(ulps), ulps * _TINY, False, False).reshape(shape)
 
 
 def _up(x: Array, ulps: int = 1) -> Array:
     """An upper bound ``ulps`` floats above ``x`` or a few more, in one compiled pass."""
-    return np.asarray(_WIDEN_UP(x, _rel(ulps), ulps * _TINY, False))
+    shape, (flat,) = flat_arrays(x)
+    return _widen(flat, _rel(ulps), ulps * _TINY, False, True).reshape(shape)
 
 
 def _down_sum(x: Array) -> Array:
     """A rounded sum or difference widened down; a zero result is exact (with
     gradual underflow a float sum rounds to zero only when it is zero)."""
-    return np.asarray(_WIDEN_DOWN(x, _rel(1), _TINY, True))
+    shape, (flat,) = flat_arrays(x)
+    return _widen(flat, _REL_1, _TINY, True, False).reshape(shape)
 
 
 def _up_sum(x: Array) -> Array:
     """A rounded sum or difference widened up; a zero result is exact."""
-    return np.asarray(_WIDEN_UP(x, _rel(1), _TINY, True))
+    shape, (flat,) = flat_arrays(x)
+    return _widen(flat, _REL_1, _TINY, True, True).reshape(shape)
 
 
 @njit(cache=True, nogil=True)
@@ -259,14 +270,22 @@ class Interval:
     def __add__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
         with np.errstate(over="ignore"):
-            return Interval(_ADD_DOWN(self.lo, o.lo), _ADD_UP(self.hi, o.hi))
+            shape, (a_lo, a_hi, b_lo, b_hi) = flat_arrays(self.lo, self.hi, o.lo, o.hi)
+        return Interval(
+            _sum_bounds(a_lo, b_lo, False).reshape(shape),
+            _sum_bounds(a_hi, b_hi, True).reshape(shape),
+        )
 
     __radd__ = __add__
 
     def __sub__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
         with np.errstate(over="ignore"):
-            return Interval(_ADD_DOWN(self.lo, -o.hi), _ADD_UP(self.hi, -o.lo))
+            shape, (a_lo, a_hi, b_lo, b_hi) = flat_arrays(self.lo, self.hi, o.lo, o.hi)
+        return Interval(
+            _sum_bounds(a_lo, -b_hi, False).reshape(shape),
+            _sum_bounds(a_hi, -b_lo, True).reshape(shape),
+        )
 
     def __rsub__(self, other: IntervalLike) -> Interval:
         return as_interval(other) - self
@@ -349,12 +368,12 @@ def _holds_angle(lo: float, hi: float, phase: float) -> bool:  # pragma: no cove
     return phase + k * _TWO_PI <= hi + tol
 
 
-@vectorize(["boolean(float64, float64, float64)"], cache=True)
-def _may_contain(lo: float, hi: float, phase: float) -> bool:  # pragma: no cover - compiled
-    return _holds_angle(lo, hi, phase)
-
-
-_MAY_CONTAIN = _may_contain.ufunc
+@njit(cache=True, nogil=True)
+def _holds_angles(lo: Array, hi: Array, phase: Array) -> NDArray[np.bool_]:  # pragma: no cover
+    out = np.empty(lo.size, dtype=np.bool_)
+    for i in range(lo.size):
+        out[i] = _holds_angle(lo[i], hi[i], phase[i])
+    return out
 
 
 def may_contain_angle(x: Interval, phase: float | NDArray[np.float64]) -> NDArray[np.bool_]:
@@ -365,7 +384,8 @@ def may_contain_angle(x: Interval, phase: float | NDArray[np.float64]) -> NDArra
     >>> may_contain_angle(Interval([6.0, 0.5], [6.5, 1.0]), 0.0).tolist()
     [True, False]
     """
-    return np.asarray(_MAY_CONTAIN(x.lo, x.hi, phase), dtype=bool)
+    shape, (lo, hi, ph) = flat_arrays(x.lo, x.hi, phase)
+    return _holds_angles(lo, hi, ph).reshape(shape)
 
 
 @njit(cache=True, nogil=True)

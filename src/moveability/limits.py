@@ -5,11 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, vectorize
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import InvalidParameterError
-from .intervals import Interval, next_below
+from .intervals import Interval, flat_arrays, next_below
 
 __all__ = ["INSIDE", "OUTSIDE", "STRADDLES", "JointLimit", "classify_angles"]
 
@@ -170,7 +170,8 @@ def classify_angles(angles: Interval, lo: ArrayLike, hi: ArrayLike) -> NDArray[n
     [1, 2]
     """
     with np.errstate(over="ignore", invalid="ignore"):
-        return np.asarray(_CLASSIFY(angles.lo, angles.hi, lo, hi), dtype=np.uint8)
+        shape, flat = flat_arrays(angles.lo, angles.hi, lo, hi)
+        return _classify(*flat).reshape(shape)
 
 
 @njit(cache=True, nogil=True)
@@ -182,8 +183,8 @@ def _shifted(a: float, turns: float) -> float:  # pragma: no cover - compiled
     return next_below(a + next_below(shift))
 
 
-@vectorize(["uint8(float64, float64, float64, float64)"], cache=True)
-def _classify(a_lo: float, a_hi: float, lo: float, hi: float) -> int:  # pragma: no cover
+@njit(cache=True, nogil=True)
+def _classify_one(a_lo: float, a_hi: float, lo: float, hi: float) -> int:  # pragma: no cover
     width = a_hi - a_lo
     # k turns bring the interval near [lo, lo + 2 pi); the tests below are sound for
     # any k, the choice only makes them sharp
@@ -202,4 +203,14 @@ def _classify(a_lo: float, a_hi: float, lo: float, hi: float) -> int:  # pragma:
     return OUTSIDE
 
 
-_CLASSIFY = _classify.ufunc
+@njit(cache=True, nogil=True)
+def _classify(
+    a_lo: NDArray[np.float64],
+    a_hi: NDArray[np.float64],
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+) -> NDArray[np.uint8]:  # pragma: no cover - compiled
+    out = np.empty(a_lo.size, dtype=np.uint8)
+    for i in range(a_lo.size):
+        out[i] = _classify_one(a_lo[i], a_hi[i], lo[i], hi[i])
+    return out

@@ -22,13 +22,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse import coo_matrix, csr_matrix
-from scipy.sparse.csgraph import connected_components
 
 from ..hypertree.status import IN
+from ..hypertree.topology import edge_components
 from ..limits import JointLimit
 from .sheets import SheetTable
 
@@ -70,9 +70,12 @@ class RegionGraph:
     slots: int
 
     @cached_property
-    def certain_matrix(self) -> csr_matrix:
+    def certain_matrix(self) -> Any:
         """The certain graph as a sparse adjacency matrix over the nodes
-        (``leaf * P + posture``), built once, for walks along it (planning)."""
+        (``leaf * P + posture``, a ``scipy.sparse.csr_matrix``), built once, for
+        walks along it (planning)."""
+        from scipy.sparse import coo_matrix
+
         n = self.certain.size
         e = self.certain_edges
         return coo_matrix(
@@ -83,25 +86,9 @@ class RegionGraph:
 def _components(
     n_nodes: int, edges: NDArray[np.int64], taken: NDArray[np.bool_]
 ) -> tuple[NDArray[np.int64], int]:
-    """Components of the taken nodes, numbered by first node; -1 elsewhere."""
-    if edges.size:
-        graph = coo_matrix(
-            (np.ones(edges.shape[0], dtype=np.int8), (edges[:, 0], edges[:, 1])),
-            shape=(n_nodes, n_nodes),
-        ).tocsr()
-    else:
-        graph = coo_matrix((n_nodes, n_nodes), dtype=np.int8).tocsr()
-    _, raw = connected_components(graph, directed=False)
-    labels = np.full(n_nodes, -1, dtype=np.int64)
-    nodes = np.flatnonzero(taken)
-    if not nodes.size:
-        return labels, 0
-    uniq, first = np.unique(raw[nodes], return_index=True)
-    order = np.argsort(first, kind="stable")
-    rank = np.empty(uniq.size, dtype=np.int64)
-    rank[order] = np.arange(uniq.size)
-    labels[nodes] = rank[np.searchsorted(uniq, raw[nodes])]
-    return labels, int(uniq.size)
+    """Components of the taken nodes, numbered by first node; -1 elsewhere (the edges
+    may pass through nodes not taken)."""
+    return edge_components(n_nodes, edges, taken)
 
 
 def _posture_pairs(postures: NDArray[np.int64]) -> list[tuple[int, int, NDArray[np.bool_]]]:

@@ -16,8 +16,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import shortest_path
 
 from ..errors import InvalidParameterError, ResolutionError
 from ..hypertree.keys import MAX_KEY_BITS
@@ -420,6 +418,9 @@ def _necks(
     joins the two parts through them. For each pair of parts the chains within
     ``slack`` leaves of the shortest are kept, and their gap leaves returned.
     """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import shortest_path
+
     n = gap.size
     out = np.zeros(n, dtype=bool)
     seeds = np.flatnonzero(source >= 0)

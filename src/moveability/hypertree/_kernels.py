@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from .keys import KeyLayout
 
-__all__ = ["adjacent_pairs", "label_leaves"]
+__all__ = ["adjacent_pairs", "edge_components", "label_leaves"]
 
 
 @njit(cache=True, nogil=True)
@@ -290,4 +290,47 @@ def label_leaves(
 ) -> tuple[NDArray[np.int64], int]:
     """Component labels of the chosen leaves (numbered by first leaf), and their count."""
     labels, count = _label(keys, levels, chosen, *_layout_arrays(layout, periodic), directions)
+    return labels, int(count)
+
+
+@njit(cache=True, nogil=True)
+def _edge_labels(
+    n: int, a: NDArray[np.int64], b: NDArray[np.int64], taken: NDArray[np.bool_]
+) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
+    parent = np.arange(n)
+    for t in range(a.size):
+        x = _find(parent, a[t])
+        y = _find(parent, b[t])
+        if x != y:
+            if x < y:
+                parent[y] = x
+            else:
+                parent[x] = y
+    labels = np.full(n, -1, dtype=np.int64)
+    root_label = np.full(n, -1, dtype=np.int64)
+    count = 0
+    for i in range(n):
+        if not taken[i]:
+            continue
+        r = _find(parent, i)
+        if root_label[r] < 0:
+            root_label[r] = count
+            count += 1
+        labels[i] = root_label[r]
+    return labels, count
+
+
+def edge_components(
+    n: int, edges: NDArray[np.int64], taken: NDArray[np.bool_]
+) -> tuple[NDArray[np.int64], int]:
+    """Components of a graph of ``n`` nodes given by its ``(m, 2)`` edges (through any
+    node), labelled on the taken nodes in the order of their first node, -1 elsewhere;
+    and their count."""
+    e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    labels, count = _edge_labels(
+        int(n),
+        np.ascontiguousarray(e[:, 0]),
+        np.ascontiguousarray(e[:, 1]),
+        np.ascontiguousarray(taken, dtype=np.bool_),
+    )
     return labels, int(count)

@@ -22,11 +22,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 from ..types import Array
-from ._kernels import adjacent_pairs, label_leaves
+from ._kernels import adjacent_pairs, edge_components, label_leaves
 from .status import IN, status_mask
 from .tree import HyperTree, to_coordinates
 
-__all__ = ["adjacency", "boundary_faces", "components", "directions"]
+__all__ = ["adjacency", "boundary_faces", "components", "directions", "edge_components"]
 
 
 def directions(ndim: int, connectivity: int) -> NDArray[np.int8]:
