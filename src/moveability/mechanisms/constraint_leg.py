@@ -388,13 +388,27 @@ class ConstraintLeg:
 
     def _f_box(self, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
         """Enclosure of F over boxes x q: the natural one met with the mean-value form
-        ``F(c, q) + sum_j dF/dX_j(box, q) (X_j - c_j)`` about the box's centre ``c``."""
-        natural = self._box_eval(self.f, lo, hi, box, q)
+        ``F(c, q) + sum_j dF/dX_j(box, q) (X_j - c_j)`` about the box's centre ``c``.
+
+        The mean-value form is computed only where the natural enclosure holds 0:
+        elsewhere the natural one already excludes a root (and is returned)."""
+        natural = self._eval(self.f, self._coords(lo, hi, box), q)
+        with _quiet():
+            n_lo = np.where(np.isnan(natural.lo), -_INF, natural.lo)
+            n_hi = np.where(np.isnan(natural.hi), _INF, natural.hi)
+        near = np.flatnonzero((n_lo <= 0) & (n_hi >= 0))
+        if not near.size:
+            return Interval(n_lo, n_hi)
+        box_n = np.asarray(box)[near]
+        q_n = q[near]
+        # the boxes' intervals, built once for the evaluations (and the joint's
+        # enclosure q_n one object: its sines and cosines are computed once)
+        coords = self._coords(lo, hi, box_n)
         centre = 0.5 * (lo + hi)
-        mean = self._box_eval(self.f, centre, centre, box, q)
+        mean = self._eval(self.f, self._coords(centre, centre, box_n), q_n)
         for j, g in enumerate(self.df_dx):
-            dj = self._box_eval(g, lo, hi, box, q)
-            offset = Interval(lo[box, j] - centre[box, j], hi[box, j] - centre[box, j])
+            dj = self._eval(g, coords, q_n)
+            offset = Interval(lo[box_n, j] - centre[box_n, j], hi[box_n, j] - centre[box_n, j])
             # the offsets are rounded: widen them by an ulp of the bounds
             offset = Interval(
                 np.nextafter(np.minimum(offset.lo, 0.0), -_INF),
@@ -404,12 +418,20 @@ class ConstraintLeg:
         with _quiet():
             m_lo = np.where(np.isnan(mean.lo), -_INF, mean.lo)
             m_hi = np.where(np.isnan(mean.hi), _INF, mean.hi)
-            n_lo = np.where(np.isnan(natural.lo), -_INF, natural.lo)
-            n_hi = np.where(np.isnan(natural.hi), _INF, natural.hi)
-        return Interval(np.maximum(n_lo, m_lo), np.minimum(n_hi, m_hi))
+        n_lo[near] = np.maximum(n_lo[near], m_lo)
+        n_hi[near] = np.minimum(n_hi[near], m_hi)
+        return Interval(n_lo, n_hi)
 
     def _box_eval(self, g: Function, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
-        coords = [Interval(lo[box, j], hi[box, j]) for j in range(lo.shape[1])]
+        return self._eval(g, self._coords(lo, hi, box), q)
+
+    @staticmethod
+    def _coords(lo: Array, hi: Array, box: Any) -> list[Interval]:
+        """The pose coordinates of the boxes ``box`` as intervals."""
+        return [Interval(lo[box, j], hi[box, j]) for j in range(lo.shape[1])]
+
+    @staticmethod
+    def _eval(g: Function, coords: list[Interval], q: Interval) -> Interval:
         with _quiet():
             return _as_iv(g(*coords, q), q.lo.shape[0])
 
@@ -532,9 +554,20 @@ class ConstraintLeg:
         return LegReach(status=status, branches=branches, hull=hull, fold_connected=fold_connected)
 
     def _contract(
-        self, lo: Array, hi: Array, runs: _Runs, idx: NDArray[np.intp], iterations: int = 40
+        self,
+        lo: Array,
+        hi: Array,
+        runs: _Runs,
+        idx: NDArray[np.intp],
+        iterations: int = 40,
+        rtol: float = 2.0**-10,
     ) -> tuple[Array, Array]:
-        """Enclosures of the roots of certified runs ``idx``, by bisection on F's sign."""
+        """Enclosures of the roots of certified runs ``idx``, by bisection on F's sign.
+
+        A run stops once both its bounds are known within ``rtol`` of the
+        enclosure's width (the root's own spread over the box), or after
+        ``iterations`` halvings: a bound's uncertainty then widens the
+        enclosure by at most that fraction."""
         box = runs.box[idx]
         sign = runs.mono[idx].astype(np.float64)
         # lower bound: the largest point certified below the root (sign * F < 0)
@@ -543,24 +576,29 @@ class ConstraintLeg:
         # upper bound: the smallest point certified above it (sign * F > 0)
         above_a = runs.start[idx].copy()
         above_b = runs.end.hi[idx].copy()
+        active = np.arange(box.size)
         for _ in range(iterations):
-            m1 = 0.5 * (below_a + below_b)
-            m2 = 0.5 * (above_a + above_b)
-            v = self._box_eval(
-                self.f,
-                lo,
-                hi,
-                np.concatenate([box, box]),
-                Interval(np.concatenate([m1, m2])),
+            width = above_b[active] - below_a[active]
+            done = (below_b[active] - below_a[active] <= rtol * width) & (
+                above_b[active] - above_a[active] <= rtol * width
             )
-            k = box.size
-            s2 = np.concatenate([sign, sign])
+            active = active[~done]
+            if not active.size:
+                break
+            m1 = 0.5 * (below_a[active] + below_b[active])
+            m2 = 0.5 * (above_a[active] + above_b[active])
+            b = box[active]
+            v = self._box_eval(
+                self.f, lo, hi, np.concatenate([b, b]), Interval(np.concatenate([m1, m2]))
+            )
+            k = active.size
+            s2 = np.concatenate([sign[active], sign[active]])
             neg = np.where(s2 > 0, v.hi < 0, v.lo > 0)
             pos = np.where(s2 > 0, v.lo > 0, v.hi < 0)
-            below_a = np.where(neg[:k], m1, below_a)
-            below_b = np.where(neg[:k], below_b, m1)
-            above_b = np.where(pos[k:], m2, above_b)
-            above_a = np.where(pos[k:], above_a, m2)
+            below_a[active] = np.where(neg[:k], m1, below_a[active])
+            below_b[active] = np.where(neg[:k], below_b[active], m1)
+            above_b[active] = np.where(pos[k:], m2, above_b[active])
+            above_a[active] = np.where(pos[k:], above_a[active], m2)
         return below_a, above_b
 
     def _fold(

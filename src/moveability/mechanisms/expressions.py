@@ -25,6 +25,7 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -120,7 +121,7 @@ def atan2(y: Any, x: Any) -> Any:
 
 
 #: the functions an expression may call, by the name it calls them
-FUNCTIONS = {
+FUNCTIONS: dict[str, Callable[..., Any]] = {
     "sin": sin,
     "cos": cos,
     "tan": tan,
