@@ -116,3 +116,28 @@ def test_regular_branches_stay_in_their_enclosures():
                 a = a + 2 * np.pi * np.round((mid - a) / (2 * np.pi))
                 assert (reach.hull.lo[folding][ok] <= a).all()
                 assert (a <= reach.hull.hi[folding][ok]).all()
+
+
+@pytest.mark.parametrize(
+    ("spec", "precision"),
+    [
+        ("examples/five-bar-paper.toml", 0.2),
+        ("examples/five-bar-unlimited.toml", 0.3),
+        ("examples/biglide.toml", 0.1),
+        ("examples/three-rpr.toml", (1.6, 1.6, 0.2)),
+    ],
+)
+def test_the_analysis_keeps_the_build_tables_of_its_leaves(spec, precision):
+    """Each leaf is classified once, while the tree is built: the table the analysis
+    holds is the one a fresh classification of its leaves gives, field by field."""
+    from dataclasses import fields
+
+    from moveability import analyze, from_spec
+
+    result = analyze(from_spec(spec), precision=precision, resolve=False)
+    leaves = result.tree.leaves()
+    fresh = classify_sheets(result.mechanism, leaves.lo, leaves.hi)
+    for field in fields(fresh):
+        kept, again = getattr(result.table, field.name), getattr(fresh, field.name)
+        assert kept.shape == again.shape, field.name
+        np.testing.assert_array_equal(kept, again, err_msg=field.name)

@@ -66,3 +66,29 @@ def test_empty_selection_has_no_component():
     labels, count = components(tree)
     assert count == 0
     assert (labels == -1).all()
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_edge_components_match_scipy(seed):
+    """The compiled union-find labels the components scipy finds, numbered by first node,
+    with edges through nodes that are not taken."""
+    from moveability.hypertree.topology import edge_components
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 400))
+    m = int(rng.integers(0, 2 * n))
+    edges = rng.integers(0, n, size=(m, 2))
+    taken = rng.random(n) < 0.7
+    labels, count = edge_components(n, edges, taken)
+    graph = coo_matrix((np.ones(m), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    _, raw = connected_components(graph, directed=False)
+    assert (labels[~taken] == -1).all()
+    assert count == len(np.unique(raw[taken]))
+    # the same partition of the taken nodes, numbered in the order of first nodes
+    nodes = np.flatnonzero(taken)
+    _, first = np.unique(raw[nodes], return_index=True)
+    order = np.argsort(first)
+    expected = np.empty(first.size, dtype=np.int64)
+    expected[order] = np.arange(first.size)
+    _, inverse = np.unique(raw[nodes], return_inverse=True)
+    np.testing.assert_array_equal(labels[nodes], expected[inverse])
