@@ -530,6 +530,49 @@ def test_adjacency_matches_brute_force(max_depth, merge):
     assert len(levels_seen) > 1
 
 
+@pytest.mark.parametrize("max_depth", [(4, 4), (5, 3), (3, 3, 3), (2, 4, 1), (2, 2, 2, 2)])
+def test_refined_adjacency_matches_a_fresh_one(max_depth):
+    """Pairs of a refined tree from the coarser tree's pairs: equal to the adjacency
+    computed afresh, whatever the statuses, periodic axes and connectivity, and
+    after several rounds of refinement (as the resolution of an analysis does)."""
+    from moveability.hypertree.topology import refined_adjacency
+
+    rng = np.random.default_rng([len(max_depth), *max_depth, 23])
+    k = len(max_depth)
+    for trial in range(6):
+        periodic = tuple(a for a in range(k) if rng.random() < 0.4)
+        # built to a level above the deepest, so that leaves can be split
+        stop = int(rng.integers(1, max(max_depth)))
+        tree = HyperTree.build(
+            np.zeros(k),
+            np.exp2(np.asarray(max_depth, dtype=float)),
+            random_classifier(rng, 0.6, True),
+            max_depth=list(max_depth),
+            periodic=periodic,
+            merge=False,
+            stop_level=stop,
+        )
+        c = int(rng.integers(1, k + 1))
+        status = [None, IN | BOUNDARY, IN][trial % 3]
+        pairs = adjacency(tree, status=status, connectivity=c)
+        for _ in range(3):
+            can = tree.levels < tree.layout.n_levels
+            if status is not None and trial % 2:
+                # split only leaves with the status: the refined pairs are then reused
+                can &= np.isin(tree.status, [s for s in (IN, OUT, BOUNDARY) if s & status])
+            mask = can & (rng.random(len(tree)) < 0.3)
+            finer = tree.refine(mask, random_classifier(rng, 0.6, True))
+            is_child = ~np.isin(finer.keys, tree.keys[~mask])
+            old_index = np.full(len(finer), -1)
+            old_index[~is_child] = np.flatnonzero(~mask)
+            got = refined_adjacency(
+                finer, tree, pairs, old_index, status=status, connectivity=c
+            )
+            pairs = adjacency(finer, status=status, connectivity=c)
+            np.testing.assert_array_equal(got, pairs, err_msg=f"{periodic}, c={c}")
+            tree = finer
+
+
 @pytest.mark.parametrize("shape", [(4, 8), (2, 4, 4), (2, 2, 2, 4), (1, 2, 4)])
 def test_adjacency_of_grid_tree_matches_grid_offsets(shape):
     # unmerged grid trees: leaves are grid cells, neighbours are grid offsets

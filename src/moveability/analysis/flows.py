@@ -82,8 +82,11 @@ class FaceNeighbours:
         self.open = open_faces
 
 
-def face_neighbours(tree: HyperTree) -> FaceNeighbours:
+def face_neighbours(tree: HyperTree, pairs: NDArray[np.intp] | None = None) -> FaceNeighbours:
     """Face neighbours of the leaves of ``tree`` that are not OUT, with their side.
+
+    ``pairs``, when given, are those leaves' face-adjacent pairs
+    (``adjacency(tree, status=IN | BOUNDARY, connectivity=1)``), known already.
 
     Examples
     --------
@@ -95,7 +98,8 @@ def face_neighbours(tree: HyperTree) -> FaceNeighbours:
     ([[0, 2], [1, 3]], [False, True, False, True])
     """
     k = tree.ndim
-    pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=1)
+    if pairs is None:
+        pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=1)
     anchors = tree.anchors
     sizes = tree.layout.cell_sizes(tree.levels)
     extent = np.left_shift(np.int64(1), np.asarray(tree.max_depth, dtype=np.int64))

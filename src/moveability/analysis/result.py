@@ -21,7 +21,7 @@ from ..errors import InvalidParameterError, ResolutionError
 from ..hypertree.keys import MAX_KEY_BITS
 from ..hypertree.measurement import leaf_volumes, locate
 from ..hypertree.status import BOUNDARY, IN, OUT
-from ..hypertree.topology import adjacency
+from ..hypertree.topology import adjacency, refined_adjacency
 from ..hypertree.tree import HyperTree, read_archive
 from ..intervals import Interval
 from ..limits import INSIDE
@@ -519,8 +519,16 @@ class Analysis:
         )
         self.areas = leaf_volumes(tree)
         live = np.flatnonzero(tree.status != OUT)
-        pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=tree.ndim)
-        self._pairs = pairs
+        if flows_of is None:
+            pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=tree.ndim)
+        else:
+            # a refinement: the pairs of the kept leaves are the coarser analysis's
+            old, old_index = flows_of
+            pairs = refined_adjacency(
+                tree, old.tree, old._pairs, old_index, status=IN | BOUNDARY, connectivity=tree.ndim
+            )
+        #: touching leaf pairs (not OUT), by a shared vertex and by a shared face
+        self._pairs: NDArray[np.intp] = pairs
         self._n_live = live.size
         self.graph: RegionGraph = region_graph(
             self.table,
@@ -530,6 +538,13 @@ class Analysis:
             limits=mechanism.limits,
             reachable_contact=_reachable_contact(mechanism, leaves, self.table, pairs),
         )
+        self._face_pairs: NDArray[np.intp]
+        if flows_of is None:
+            self._face_pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=1)
+        else:
+            self._face_pairs = refined_adjacency(
+                tree, old.tree, old._face_pairs, old_index, status=IN | BOUNDARY, connectivity=1
+            )
         self._attach(leaves, None if flows_of is None else (flows_of[0]._flows, flows_of[1]))
         self._resolve()
 
@@ -579,7 +594,7 @@ class Analysis:
             bits[:, fresh], exists[fresh], faces[:, fresh] = new_bits, new_exists, new_faces
         self._flows = (nodes, bits, exists, faces, n)
         self._spans = slot_spans(t, nodes, self.mechanism.limits)
-        neighbours = face_neighbours(self.tree)
+        neighbours = face_neighbours(self.tree, self._face_pairs)
         self._neighbours = neighbours
         #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1)
         self.open_nodes = np.zeros((2, n, n_post), dtype=bool)

@@ -161,6 +161,8 @@ def _pairs(
     positions: NDArray[np.int64],
     periodic: NDArray[np.bool_],
     directions: NDArray[np.int8],
+    sources: NDArray[np.bool_],
+    fresh: NDArray[np.bool_],
     fill: bool,
     counts: NDArray[np.int64],
     out_a: NDArray[np.int64],
@@ -172,15 +174,16 @@ def _pairs(
     in it (the two are dyadic cells: the finer one's extent along the other
     axes lies within the larger one's), so every pair is found from its finer
     leaf; a pair of leaves of one level, found from both, is kept from the
-    lower index. Without ``fill`` the pairs of each leaf are counted into
-    ``counts``; with it they are written from the offsets ``counts`` holds
-    (then the number written)."""
+    lower index. Only the ``sources`` probe, and a pair of two leaves that are
+    not ``fresh`` is left out (a refined tree's pairs between kept leaves are
+    known). Without ``fill`` the pairs of each leaf are counted into
+    ``counts``; with it they are written from the offsets ``counts`` holds."""
     n = keys.size
     n_dir = directions.shape[0]
     last = np.zeros(n_dir, dtype=np.int64)
     found = np.empty(n_dir, dtype=np.int64)
     for i in range(n):
-        if not chosen[i]:
+        if not chosen[i] or not sources[i]:
             continue
         level = np.int64(levels[i])
         m = 0
@@ -192,7 +195,7 @@ def _pairs(
                 continue
             j = _gallop(keys, key, last[d])
             last[d] = j
-            if j == i or not chosen[j]:
+            if j == i or not chosen[j] or not (fresh[i] or fresh[j]):
                 continue
             other = np.int64(levels[j])
             if other > level or (other == level and j < i):
@@ -221,19 +224,32 @@ def adjacent_pairs(
     layout: KeyLayout,
     periodic: tuple[int, ...],
     directions: NDArray[np.int8],
+    sources: NDArray[np.bool_] | None = None,
+    fresh: NDArray[np.bool_] | None = None,
+    known: NDArray[np.int64] | None = None,
 ) -> NDArray[np.int64]:
-    """Adjacent pairs of chosen leaves, ``(m, 2)`` leaf indices ``i < j`` in sorted order."""
+    """Adjacent pairs of chosen leaves, ``(m, 2)`` leaf indices ``i < j`` in sorted order.
+
+    For a refined tree, ``known`` gives the pairs between kept leaves, ``fresh``
+    the new leaves, and ``sources`` the leaves that must probe: the new ones
+    and every kept leaf that touched a split one (see :func:`_pairs`)."""
     args = _layout_arrays(layout, periodic)
     n = keys.size
+    every = np.ones(n, dtype=np.bool_)
+    src = every if sources is None else sources
+    new = every if fresh is None else fresh
     counts = np.zeros(n, dtype=np.int64)
     empty = np.zeros(0, dtype=np.int64)
-    _pairs(keys, levels, chosen, *args, directions, False, counts, empty, empty)
+    _pairs(keys, levels, chosen, *args, directions, src, new, False, counts, empty, empty)
     offsets = np.zeros(n, dtype=np.int64)
     np.cumsum(counts[:-1], out=offsets[1:])
     total = int(counts.sum())
     a = np.empty(total, dtype=np.int64)
     b = np.empty(total, dtype=np.int64)
-    _pairs(keys, levels, chosen, *args, directions, True, offsets, a, b)
+    _pairs(keys, levels, chosen, *args, directions, src, new, True, offsets, a, b)
+    if known is not None and known.size:
+        a = np.concatenate([a, known[:, 0]])
+        b = np.concatenate([b, known[:, 1]])
     return _sorted_pairs(a, b, n)
 
 

@@ -26,7 +26,14 @@ from ._kernels import adjacent_pairs, edge_components, label_leaves
 from .status import IN, status_mask
 from .tree import HyperTree, to_coordinates
 
-__all__ = ["adjacency", "boundary_faces", "components", "directions", "edge_components"]
+__all__ = [
+    "adjacency",
+    "boundary_faces",
+    "components",
+    "directions",
+    "edge_components",
+    "refined_adjacency",
+]
 
 
 def directions(ndim: int, connectivity: int) -> NDArray[np.int8]:
@@ -93,6 +100,76 @@ def adjacency(
         tree.keys, tree.levels, chosen, tree.layout, tree.periodic, directions(tree.ndim, c)
     )
     return pairs.astype(np.intp)
+
+
+def refined_adjacency(
+    tree: HyperTree,
+    old_tree: HyperTree,
+    old_pairs: NDArray[np.intp],
+    old_index: NDArray[np.intp],
+    *,
+    status: int | None = None,
+    connectivity: int = 1,
+) -> NDArray[np.intp]:
+    """:func:`adjacency` of a tree refined from ``old_tree``, whose pairs are known.
+
+    ``old_pairs`` are ``old_tree``'s pairs for the same ``status`` and
+    ``connectivity``; ``old_index`` gives each leaf of ``tree`` its index in
+    ``old_tree``, -1 for a new leaf (a child of a split one); kept leaves keep
+    their statuses. Kept leaves keep their pairs with each other; only the new
+    leaves and the kept leaves that touched a split one probe. When a split
+    leaf did not have the ``status`` (its neighbours are then not all known),
+    the plain :func:`adjacency` is computed.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability import BOUNDARY, HyperTree, adjacency
+    >>> def undecided(lo, hi):
+    ...     return np.full(len(lo), BOUNDARY, dtype=np.uint8)
+    >>> coarse = HyperTree.build([0, 0], [1, 1], undecided, max_depth=3, stop_level=1)
+    >>> fine = coarse.refine([True, False, False, False], undecided)
+    >>> index = np.array([-1, -1, -1, -1, 1, 2, 3])  # the children of leaf 0 come first
+    >>> pairs = refined_adjacency(fine, coarse, adjacency(coarse), index)
+    >>> bool(np.array_equal(pairs, adjacency(fine)))
+    True
+    """
+    c = _check_connectivity(tree, connectivity)
+    chosen = (
+        np.ones(len(tree), dtype=bool) if status is None else (status_mask(status)[tree.status])
+    )
+    old_chosen = (
+        np.ones(len(old_tree), dtype=bool)
+        if status is None
+        else (status_mask(status)[old_tree.status])
+    )
+    old_index = np.asarray(old_index, dtype=np.int64)
+    if old_index.shape != (len(tree),) or old_index.max(initial=-1) >= len(old_tree):
+        raise InvalidParameterError(
+            "old_index", f"one index below {len(old_tree)} (or -1) per leaf", old_index.shape
+        )
+    kept = old_index >= 0
+    new_of_old = np.full(len(old_tree), -1, dtype=np.int64)
+    new_of_old[old_index[kept]] = np.flatnonzero(kept)
+    split = new_of_old < 0
+    if (split & ~old_chosen).any():
+        return adjacency(tree, status=status, connectivity=c)
+    ends = new_of_old[np.asarray(old_pairs, dtype=np.int64).reshape(-1, 2)]
+    both = (ends >= 0).all(axis=1)
+    touched = ends[~both].ravel()
+    sources = ~kept
+    sources[touched[touched >= 0]] = True
+    return adjacent_pairs(
+        tree.keys,
+        tree.levels,
+        chosen,
+        tree.layout,
+        tree.periodic,
+        directions(tree.ndim, c),
+        sources=sources,
+        fresh=~kept,
+        known=ends[both],
+    ).astype(np.intp)
 
 
 def components(
