@@ -27,6 +27,38 @@ def _find(parent: NDArray[np.int64], i: int) -> int:  # pragma: no cover - compi
 
 
 @njit(cache=True, nogil=True)
+def _union(parent: NDArray[np.int64], i: int, j: int) -> None:  # pragma: no cover - compiled
+    """Join the sets of ``i`` and ``j``; the smaller root stays the root."""
+    a = _find(parent, i)
+    b = _find(parent, j)
+    if a != b:
+        if a < b:
+            parent[b] = a
+        else:
+            parent[a] = b
+
+
+@njit(cache=True, nogil=True)
+def _relabel(
+    parent: NDArray[np.int64], taken: NDArray[np.bool_]
+) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
+    """Labels of the taken elements' sets, numbered by first element (-1 elsewhere)."""
+    n = parent.size
+    labels = np.full(n, -1, dtype=np.int64)
+    root_label = np.full(n, -1, dtype=np.int64)
+    count = 0
+    for i in range(n):
+        if not taken[i]:
+            continue
+        r = _find(parent, i)
+        if root_label[r] < 0:
+            root_label[r] = count
+            count += 1
+        labels[i] = root_label[r]
+    return labels, count
+
+
+@njit(cache=True, nogil=True)
 def _gallop(keys: NDArray[np.uint64], target: np.uint64, start: int) -> int:  # pragma: no cover
     """Index of the last key <= target, searching outwards from ``start``."""
     n = keys.size
@@ -130,25 +162,8 @@ def _label(
             j = _gallop(keys, key, last[d])
             last[d] = j
             if chosen[j]:
-                a = _find(parent, i)
-                b = _find(parent, j)
-                if a != b:
-                    if a < b:
-                        parent[b] = a
-                    else:
-                        parent[a] = b
-    labels = np.full(n, -1, dtype=np.int64)
-    root_label = np.full(n, -1, dtype=np.int64)
-    count = 0
-    for i in range(n):
-        if not chosen[i]:
-            continue
-        r = _find(parent, i)
-        if root_label[r] < 0:
-            root_label[r] = count
-            count += 1
-        labels[i] = root_label[r]
-    return labels, count
+                _union(parent, i, j)
+    return _relabel(parent, chosen)
 
 
 @njit(cache=True, nogil=True)
@@ -315,25 +330,8 @@ def _edge_labels(
 ) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
     parent = np.arange(n)
     for t in range(a.size):
-        x = _find(parent, a[t])
-        y = _find(parent, b[t])
-        if x != y:
-            if x < y:
-                parent[y] = x
-            else:
-                parent[x] = y
-    labels = np.full(n, -1, dtype=np.int64)
-    root_label = np.full(n, -1, dtype=np.int64)
-    count = 0
-    for i in range(n):
-        if not taken[i]:
-            continue
-        r = _find(parent, i)
-        if root_label[r] < 0:
-            root_label[r] = count
-            count += 1
-        labels[i] = root_label[r]
-    return labels, count
+        _union(parent, a[t], b[t])
+    return _relabel(parent, taken)
 
 
 def edge_components(
