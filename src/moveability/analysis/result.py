@@ -373,7 +373,13 @@ def _split(
     finer = tree.refine(mask, classify)
     # kept leaves stay in order among the new ones; children come in key order (a
     # child's key lies in its parent's range, apart from every kept leaf's)
-    is_child = ~np.isin(finer.keys, tree.keys[~mask])
+    # both key lists are sorted: a binary search finds the kept leaves
+    kept_keys = tree.keys[~mask]
+    if kept_keys.size:
+        at = np.minimum(np.searchsorted(kept_keys, finer.keys), kept_keys.size - 1)
+        is_child = kept_keys[at] != finer.keys
+    else:
+        is_child = np.ones(len(finer), dtype=bool)
     stacked = stack_tables([table.take(np.flatnonzero(~mask)), children[0]])
     n_kept = int((~is_child).sum())
     order = np.empty(len(finer), dtype=np.intp)
