@@ -74,6 +74,7 @@ from numpy.typing import NDArray
 
 from ..intervals import Interval
 from ..types import Array
+from . import expressions as ex
 from .base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, LegReach
 
 __all__ = ["ConstraintLeg"]
@@ -355,12 +356,13 @@ class ConstraintLeg:
         for level in range(self.depth + 1):
             if not box.size:
                 break
-            fv = self._f_box(lo, hi, box, Interval(qlo, qhi))
-            keep = ~((fv.lo > 0) | (fv.hi < 0))
+            q = Interval(qlo, qhi)
+            fv = self._f_box(lo, hi, box, q)
+            keep = np.flatnonzero(~((fv.lo > 0) | (fv.hi < 0)))
             box, qlo, qhi = box[keep], qlo[keep], qhi[keep]
             fv = fv[keep]
             finite = np.isfinite(fv.lo) & np.isfinite(fv.hi)
-            dv = self._box_eval(self.df_dq, lo, hi, box, Interval(qlo, qhi))
+            dv = self._box_eval(self.df_dq, lo, hi, box, ex.take(q, keep))
             mono = np.where(finite & (dv.lo > 0), 1, np.where(finite & (dv.hi < 0), -1, 0)).astype(
                 np.int8
             )
@@ -400,7 +402,7 @@ class ConstraintLeg:
         if not near.size:
             return Interval(n_lo, n_hi)
         box_n = np.asarray(box)[near]
-        q_n = q[near]
+        q_n = ex.take(q, near)
         # the boxes' intervals, built once for the evaluations (and the joint's
         # enclosure q_n one object: its sines and cosines are computed once)
         coords = self._coords(lo, hi, box_n)

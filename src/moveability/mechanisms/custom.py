@@ -238,32 +238,10 @@ def _rational_float(p: int, q: int) -> float:
     return float(Fraction(p, q))
 
 
-def _shared(name: str, f: Callable[..., Any]) -> Callable[[Any], Any]:
-    """``f`` over intervals, computed once per interval object: a leg's constraint and
-    its derivatives are evaluated on one enclosure of the joint (the same object)
-    and call ``sin(q)``, ``cos(q)`` each; the enclosure remembers them. Intervals
-    are immutable, and the memory goes with the object."""
-
-    def g(x: Any) -> Any:
-        if not isinstance(x, Interval):
-            return f(x)
-        memo: dict[str, Any] = x.__dict__.setdefault("_shared", {})
-        if name not in memo:
-            memo[name] = f(x)
-        return memo[name]
-
-    return g
-
-
 _PI_IV = Interval(np.float64(np.pi), np.nextafter(np.pi, np.inf))
 _COMMON = {**ex.FUNCTIONS, "absolute": ex.absolute, "power": ex.power, "sign": _sign}
 _FLOAT_NS = {**_COMMON, "PI": float(np.pi), "rational": _rational_float}
-_INTERVAL_NS = {
-    **_COMMON,
-    **{name: _shared(name, ex.FUNCTIONS[name]) for name in ("sin", "cos", "tan", "exp")},
-    "PI": _PI_IV,
-    "rational": iv.rational,
-}
+_INTERVAL_NS = {**_COMMON, "PI": _PI_IV, "rational": iv.rational}
 
 
 def compile_expression(

@@ -44,6 +44,7 @@ __all__ = [
     "power",
     "sin",
     "sqrt",
+    "take",
     "tan",
 ]
 
@@ -60,24 +61,55 @@ def _whole(x: Interval, where: Any) -> Interval:
     return Interval(np.where(where, -_INF, x.lo), np.where(where, _INF, x.hi))
 
 
+_SHARED = "_shared"
+
+
+def _once(name: str, x: Interval, f: Any) -> Interval:
+    """``f(x)`` computed once per interval object: a leg's constraint and its
+    derivatives are evaluated on one enclosure of the joint and call ``sin(q)``,
+    ``cos(q)`` each; the enclosure remembers them (intervals are not changed once
+    evaluated, and the memory goes with the object)."""
+    memo: dict[str, Interval] = x.__dict__.setdefault(_SHARED, {})
+    if name not in memo:
+        memo[name] = f(x)
+    return memo[name]
+
+
+def take(x: Interval, index: Any) -> Interval:
+    """``x[index]``, with the values remembered for ``x`` (see :func:`sin`) taken too.
+
+    Examples
+    --------
+    >>> q = Interval([0.0, 1.0], [0.5, 1.5])
+    >>> s = sin(q)
+    >>> sin(take(q, [1])).lo.tolist() == s.lo[[1]].tolist()
+    True
+    """
+    out = x[index]
+    memo = x.__dict__.get(_SHARED)
+    if memo:
+        out.__dict__[_SHARED] = {name: value[index] for name, value in memo.items()}
+    return out
+
+
 def sin(x: Any) -> Any:
-    """Sine."""
-    return iv.sin(x) if isinstance(x, Interval) else np.sin(x)
+    """Sine (over an interval, computed once per interval object)."""
+    return _once("sin", x, iv.sin) if isinstance(x, Interval) else np.sin(x)
 
 
 def cos(x: Any) -> Any:
-    """Cosine."""
-    return iv.cos(x) if isinstance(x, Interval) else np.cos(x)
+    """Cosine (over an interval, computed once per interval object)."""
+    return _once("cos", x, iv.cos) if isinstance(x, Interval) else np.cos(x)
 
 
 def tan(x: Any) -> Any:
     """Tangent (the whole line over an interval that may hold a pole)."""
-    return iv.tan(x) if isinstance(x, Interval) else np.tan(x)
+    return _once("tan", x, iv.tan) if isinstance(x, Interval) else np.tan(x)
 
 
 def exp(x: Any) -> Any:
     """Exponential."""
-    return iv.exp(x) if isinstance(x, Interval) else np.exp(x)
+    return _once("exp", x, iv.exp) if isinstance(x, Interval) else np.exp(x)
 
 
 def log(x: Any) -> Any:
