@@ -40,7 +40,6 @@ __all__ = [
     "hull",
     "log",
     "may_contain_angle",
-    "next_above",
     "next_below",
     "power",
     "rational",
@@ -48,6 +47,8 @@ __all__ = [
     "sqrt",
     "square",
     "tan",
+    "widen_down",
+    "widen_up",
 ]
 
 _INF = np.inf
@@ -87,13 +88,11 @@ def _above(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # prag
 
 
 @njit(cache=True, nogil=True)
-def _widen(
-    x: Array, rel: float, tiny: float, keep_zero: bool, up: bool
-) -> Array:  # pragma: no cover - compiled
+def _widen(x: Array, rel: float, tiny: float, up: bool) -> Array:  # pragma: no cover
     """:func:`_below` (or :func:`_above`) of each element of a flat array."""
     out = np.empty_like(x)
     for i in range(x.size):
-        out[i] = _above(x[i], rel, tiny, keep_zero) if up else _below(x[i], rel, tiny, keep_zero)
+        out[i] = _above(x[i], rel, tiny, False) if up else _below(x[i], rel, tiny, False)
     return out
 
 
@@ -146,35 +145,27 @@ def next_below(x: float) -> float:  # pragma: no cover - compiled
     return _below(x, _REL_1, _TINY, False)
 
 
-@njit(cache=True, nogil=True)
-def next_above(x: float) -> float:  # pragma: no cover - compiled
-    """A float at least one float above ``x`` (a few at most)."""
-    return _above(x, _REL_1, _TINY, False)
+def widen_down(x: ArrayLike, ulps: int = 1) -> Array:
+    """Outward rounding of lower bounds: each float moved at least ``ulps`` floats
+    down (at most ``2 * ulps + 3``), in one compiled pass; NaN stays, +inf (an
+    overflow) becomes a finite bound.
 
-
-def _down(x: Array, ulps: int = 1) -> Array:
-    """A lower bound ``ulps`` floats below ``x`` or a few more, in one compiled pass."""
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = np.array([1.0, 0.0, -2.5])
+    >>> bool((widen_down(x, 2) <= np.nextafter(np.nextafter(x, -np.inf), -np.inf)).all())
+    True
+    """
     shape, (flat,) = flat_arrays(x)
-    return _widen(flat, _rel(ulps), ulps * _TINY, False, False).reshape(shape)
+    return _widen(flat, _rel(ulps), ulps * _TINY, False).reshape(shape)
 
 
-def _up(x: Array, ulps: int = 1) -> Array:
-    """An upper bound ``ulps`` floats above ``x`` or a few more, in one compiled pass."""
+def widen_up(x: ArrayLike, ulps: int = 1) -> Array:
+    """Outward rounding of upper bounds: each float moved at least ``ulps`` floats up
+    (see :func:`widen_down`)."""
     shape, (flat,) = flat_arrays(x)
-    return _widen(flat, _rel(ulps), ulps * _TINY, False, True).reshape(shape)
-
-
-def _down_sum(x: Array) -> Array:
-    """A rounded sum or difference widened down; a zero result is exact (with
-    gradual underflow a float sum rounds to zero only when it is zero)."""
-    shape, (flat,) = flat_arrays(x)
-    return _widen(flat, _REL_1, _TINY, True, False).reshape(shape)
-
-
-def _up_sum(x: Array) -> Array:
-    """A rounded sum or difference widened up; a zero result is exact."""
-    shape, (flat,) = flat_arrays(x)
-    return _widen(flat, _REL_1, _TINY, True, True).reshape(shape)
+    return _widen(flat, _rel(ulps), ulps * _TINY, True).reshape(shape)
 
 
 @njit(cache=True, nogil=True)
@@ -313,8 +304,8 @@ class Interval:
         o = as_interval(other)
         straddles = (o.lo <= 0) & (o.hi >= 0)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            inv_lo = np.where(straddles, -_INF, _down(1.0 / o.hi))
-            inv_hi = np.where(straddles, _INF, _up(1.0 / o.lo))
+            inv_lo = np.where(straddles, -_INF, widen_down(1.0 / o.hi))
+            inv_hi = np.where(straddles, _INF, widen_up(1.0 / o.lo))
         return self * Interval(inv_lo, inv_hi)
 
     def __rtruediv__(self, other: IntervalLike) -> Interval:
@@ -354,8 +345,8 @@ def sqrt(x: IntervalLike) -> Interval:
     """Square root of the non-negative part of each interval (``nan`` where empty)."""
     x = as_interval(x)
     with np.errstate(invalid="ignore"):
-        lo = np.where(x.lo <= 0, 0.0, _down(np.sqrt(np.maximum(x.lo, 0.0))))
-        hi = np.where(x.hi < 0, np.nan, _up(np.sqrt(np.maximum(x.hi, 0.0))))
+        lo = np.where(x.lo <= 0, 0.0, widen_down(np.sqrt(np.maximum(x.lo, 0.0))))
+        hi = np.where(x.hi < 0, np.nan, widen_up(np.sqrt(np.maximum(x.hi, 0.0))))
     return Interval(np.maximum(lo, 0.0), hi)
 
 
@@ -453,8 +444,8 @@ def arccos(x: IntervalLike) -> Interval:
     x = as_interval(x)
     lo_arg = np.clip(x.hi, -1.0, 1.0)
     hi_arg = np.clip(x.lo, -1.0, 1.0)
-    lo = np.maximum(_down(np.arccos(lo_arg), _LIB_ULPS), 0.0)
-    hi = np.minimum(_up(np.arccos(hi_arg), _LIB_ULPS), _PI_UP)
+    lo = np.maximum(widen_down(np.arccos(lo_arg), _LIB_ULPS), 0.0)
+    hi = np.minimum(widen_up(np.arccos(hi_arg), _LIB_ULPS), _PI_UP)
     return Interval(lo, hi)
 
 
@@ -473,8 +464,8 @@ def arctan2(y: IntervalLike, x: IntervalLike) -> Interval:
             np.arctan2(y.hi, x.hi),
         ]
     )
-    lo = _down(corners.min(axis=0), _LIB_ULPS)
-    hi = _up(corners.max(axis=0), _LIB_ULPS)
+    lo = widen_down(corners.min(axis=0), _LIB_ULPS)
+    hi = widen_up(corners.max(axis=0), _LIB_ULPS)
     # the angle is monotone in each coordinate on boxes that avoid the cut
     # and the origin, so the corners give its range there
     cut = (x.lo <= 0) & (y.lo <= 0) & (y.hi >= 0)
@@ -518,14 +509,14 @@ def power(x: IntervalLike, n: int) -> Interval:
     with np.errstate(over="ignore"):
         if n % 2:
             # odd powers are increasing
-            lo = _down(np.power(x.lo, n), ulps)
-            hi = _up(np.power(x.hi, n), ulps)
+            lo = widen_down(np.power(x.lo, n), ulps)
+            hi = widen_up(np.power(x.hi, n), ulps)
             return Interval(lo, hi)
         a, b = np.abs(x.lo), np.abs(x.hi)
         small, large = np.minimum(a, b), np.maximum(a, b)
         straddles = (x.lo <= 0) & (x.hi >= 0)
-        lo = np.where(straddles, 0.0, _down(np.power(small, n), ulps))
-        hi = _up(np.power(large, n), ulps)
+        lo = np.where(straddles, 0.0, widen_down(np.power(small, n), ulps))
+        hi = widen_up(np.power(large, n), ulps)
     return Interval(np.maximum(lo, 0.0), hi)
 
 
@@ -540,8 +531,8 @@ def exp(x: IntervalLike) -> Interval:
     """
     x = as_interval(x)
     with np.errstate(over="ignore"):
-        lo = np.maximum(_down(np.exp(x.lo), _LIB_ULPS), 0.0)
-        hi = _up(np.exp(x.hi), _LIB_ULPS)
+        lo = np.maximum(widen_down(np.exp(x.lo), _LIB_ULPS), 0.0)
+        hi = widen_up(np.exp(x.hi), _LIB_ULPS)
     return Interval(lo, hi)
 
 
@@ -559,8 +550,8 @@ def log(x: IntervalLike) -> Interval:
     """
     x = as_interval(x)
     with np.errstate(invalid="ignore", divide="ignore"):
-        lo = np.where(x.lo <= 0, -_INF, _down(np.log(np.maximum(x.lo, 0.0)), _LIB_ULPS))
-        hi = np.where(x.hi <= 0, np.nan, _up(np.log(np.maximum(x.hi, 0.0)), _LIB_ULPS))
+        lo = np.where(x.lo <= 0, -_INF, widen_down(np.log(np.maximum(x.lo, 0.0)), _LIB_ULPS))
+        hi = np.where(x.hi <= 0, np.nan, widen_up(np.log(np.maximum(x.hi, 0.0)), _LIB_ULPS))
     lo = np.where(x.hi <= 0, np.nan, lo)
     return Interval(lo, hi)
 
@@ -581,8 +572,8 @@ def tan(x: IntervalLike) -> Interval:
     pole = wide | may_contain_angle(x, 0.5 * np.pi) | may_contain_angle(x, -0.5 * np.pi)
     pole |= ~np.isfinite(x.lo) | ~np.isfinite(x.hi)
     with np.errstate(invalid="ignore"):
-        lo = _down(np.tan(x.lo), _LIB_ULPS)
-        hi = _up(np.tan(x.hi), _LIB_ULPS)
+        lo = widen_down(np.tan(x.lo), _LIB_ULPS)
+        hi = widen_up(np.tan(x.hi), _LIB_ULPS)
     return Interval(np.where(pole, -_INF, lo), np.where(pole, _INF, hi))
 
 

@@ -356,6 +356,24 @@ def _leaf_table(
     return stack_tables(tables).take(source)
 
 
+def _touching(
+    tree: HyperTree,
+    connectivity: int,
+    refines: tuple[Analysis, NDArray[np.intp]] | None,
+    known: str,
+) -> NDArray[np.intp]:
+    """Pairs of touching leaves that are not OUT; for a refinement (the coarser
+    analysis and each leaf's old index), from the coarser analysis's pairs (its
+    attribute ``known``)."""
+    if refines is None:
+        return adjacency(tree, status=IN | BOUNDARY, connectivity=connectivity)
+    old, old_index = refines
+    old_pairs: NDArray[np.intp] = getattr(old, known)
+    return refined_adjacency(
+        tree, old.tree, old_pairs, old_index, status=IN | BOUNDARY, connectivity=connectivity
+    )
+
+
 def _split(
     mechanism: Mechanism, tree: HyperTree, table: SheetTable, mask: NDArray[np.bool_]
 ) -> tuple[HyperTree, SheetTable, NDArray[np.intp]]:
@@ -525,16 +543,10 @@ class Analysis:
         )
         self.areas = leaf_volumes(tree)
         live = np.flatnonzero(tree.status != OUT)
-        if flows_of is None:
-            pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=tree.ndim)
-        else:
-            # a refinement: the pairs of the kept leaves are the coarser analysis's
-            old, old_index = flows_of
-            pairs = refined_adjacency(
-                tree, old.tree, old._pairs, old_index, status=IN | BOUNDARY, connectivity=tree.ndim
-            )
         #: touching leaf pairs (not OUT), by a shared vertex and by a shared face
-        self._pairs: NDArray[np.intp] = pairs
+        self._pairs = _touching(tree, tree.ndim, flows_of, "_pairs")
+        self._face_pairs = _touching(tree, 1, flows_of, "_face_pairs")
+        pairs = self._pairs
         self._n_live = live.size
         self.graph: RegionGraph = region_graph(
             self.table,
@@ -544,13 +556,6 @@ class Analysis:
             limits=mechanism.limits,
             reachable_contact=_reachable_contact(mechanism, leaves, self.table, pairs),
         )
-        self._face_pairs: NDArray[np.intp]
-        if flows_of is None:
-            self._face_pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=1)
-        else:
-            self._face_pairs = refined_adjacency(
-                tree, old.tree, old._face_pairs, old_index, status=IN | BOUNDARY, connectivity=1
-            )
         self._attach(leaves, None if flows_of is None else (flows_of[0]._flows, flows_of[1]))
         self._resolve()
 
