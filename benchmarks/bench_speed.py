@@ -432,6 +432,24 @@ def case_five_bar(eps: float) -> None:
     print()
 
 
+def case_crossover(precisions: Sequence[float]) -> None:
+    print("1b. the same comparison at finer precisions: the grid grows with the area,")
+    print("    the certified analysis with the boundary")
+    params = run_case("params", str(PAPER))
+    rows = []
+    for eps in precisions:
+        cert = regions_process(PAPER, repr(eps))
+        grid = run_case("five-bar-grid", params, eps)
+        rows.append([
+            f"{eps:g}", str(cert["leaves"]), f"{cert['wall']:.2f}", f"{cert['rss_mib']:.0f}",
+            grid["grid"], f"{grid['wall']:.2f}", f"{grid['rss_mib']:.0f}",
+            f"{cert['wall'] / grid['wall']:.2f}",
+        ])  # fmt: skip
+    head = ["eps", "leaves", "regions s", "MiB", "grid", "grid s", "MiB", "ratio"]
+    print(indent(table(head, rows)))
+    print()
+
+
 def case_three_rpr(parts: int) -> None:
     params = run_case("params", str(RPR))
     eps = span_precision(params, parts)
@@ -544,10 +562,11 @@ def main() -> None:
     run_analysis_case(RPR, span_precision(run_case("params", str(RPR)), 16))
     if args.quick:
         fb_eps, rpr_parts, custom_eps, n_start = 0.1, 64, 0.2, 3
-        five_bar, parts = [0.1, 0.05], [16, 32]
+        five_bar, parts, finer = [0.1, 0.05], [16, 32], [0.05]
     else:
         fb_eps, rpr_parts, custom_eps, n_start = 0.035, 256, 0.05, 5
         five_bar, parts = [0.1, 0.05, 0.02, 0.01, 0.005], [64, 128, 256]
+        finer = [0.02, 0.01, 0.005]
         if args.full:
             five_bar += [0.002, 0.001]
             parts += [512]
@@ -556,6 +575,7 @@ def main() -> None:
     print("the process' peak resident memory (ru_maxrss). Targets are printed, not asserted.")
     print()
     case_five_bar(fb_eps)
+    case_crossover(finer)
     case_three_rpr(rpr_parts)
     case_custom(custom_eps)
     case_startup(n_start)
