@@ -28,7 +28,8 @@ from .errors import (
 
 if TYPE_CHECKING:
     from .analysis.planning import default_poses, plan_motion
-    from .analysis.result import Analysis, Region, analyze, load_analysis
+    from .analysis.result import Analysis, Region, analyze
+    from .analysis.saved import load_analysis, save_analysis
     from .hypertree.measurement import leaf_volumes, locate, measure
     from .hypertree.projection import project
     from .hypertree.setops import complement, difference, equals, intersection, union
@@ -45,7 +46,8 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 #: where each lazily imported public name lives
 _LAZY: dict[str, str] = {
     **dict.fromkeys(("default_poses", "plan_motion"), "analysis.planning"),
-    **dict.fromkeys(("Analysis", "Region", "analyze", "load_analysis"), "analysis.result"),
+    **dict.fromkeys(("Analysis", "Region", "analyze"), "analysis.result"),
+    **dict.fromkeys(("load_analysis", "save_analysis"), "analysis.saved"),
     **dict.fromkeys(("leaf_volumes", "locate", "measure"), "hypertree.measurement"),
     "project": "hypertree.projection",
     **dict.fromkeys(
@@ -106,5 +108,6 @@ __all__ = [
     "measure",
     "plan_motion",
     "project",
+    "save_analysis",
     "union",
 ]

@@ -47,6 +47,8 @@ __all__ = [
     "UNLIMITED",
     "MechanismSchema",
     "check_spec",
+    "describe_spec",
+    "format_angle",
     "parse_angle",
     "read_toml",
 ]
@@ -152,6 +154,64 @@ def parse_angle(value: object, name: str = "angle") -> float:
     if not math.isfinite(angle):
         raise SpecError(name, _ANGLE_ALLOWED, value)
     return angle
+
+
+def format_angle(value: float) -> str:
+    """An angle as :func:`parse_angle` reads it: a simple multiple of ``pi`` where
+    it is one (to 1e-12), else the number.
+
+    Examples
+    --------
+    >>> format_angle(math.pi), format_angle(-math.pi / 2), format_angle(3 * math.pi / 4)
+    ('pi', '-pi/2', '3*pi/4')
+    >>> format_angle(0.0), format_angle(0.25)
+    ('0', '0.25')
+    >>> parse_angle(format_angle(-5 * math.pi / 6)) == -5 * math.pi / 6
+    True
+    """
+    v = float(value)
+    if v == 0.0 or not math.isfinite(v):
+        return f"{v:g}"
+    for den in (1, 2, 3, 4, 6, 8, 12):
+        num = round(v * den / math.pi)
+        if num and abs(v - num * math.pi / den) <= 1e-12 * max(1.0, abs(v)):
+            sign, k = ("-" if num < 0 else ""), abs(num) // math.gcd(abs(num), den)
+            d = den // math.gcd(abs(num), den)
+            text = ("pi" if k == 1 else f"{k}*pi") + ("" if d == 1 else f"/{d}")
+            return sign + text
+    return f"{v:.12g}"
+
+
+def describe_spec(spec: Mapping[str, Any]) -> str:
+    """A spec mapping in one line for people: the mechanism, its parameters and
+    joint limits (angles as multiples of pi where they are).
+
+    Examples
+    --------
+    >>> describe_spec({"mechanism": "five-bar",
+    ...                "parameters": {"L0": 7.0, "L1": 8.0},
+    ...                "limits": {"theta1": [0.0, math.pi], "theta2": "unlimited"}})
+    'five-bar: L0 = 7, L1 = 8; limits theta1 in [0, pi], theta2 unlimited'
+    """
+
+    def show(value: Any) -> str:
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            return f"{value:g}"
+        if isinstance(value, list | tuple):
+            return "[" + ", ".join(show(v) for v in value) + "]"
+        return str(value)
+
+    parts = [f"{k} = {show(v)}" for k, v in dict(spec.get("parameters") or {}).items()]
+    text = f"{spec.get('mechanism', '?')}: " + (", ".join(parts) if parts else "(no parameters)")
+    limits = []
+    for joint, lim in dict(spec.get("limits") or {}).items():
+        if lim == UNLIMITED:
+            limits.append(f"{joint} unlimited")
+        elif isinstance(lim, list | tuple) and len(lim) == 2:
+            limits.append(f"{joint} in [{format_angle(lim[0])}, {format_angle(lim[1])}]")
+        else:
+            limits.append(f"{joint} {show(lim)}")
+    return text + ("; limits " + ", ".join(limits) if limits else "")
 
 
 def _parse_angle_text(text: str, name: str) -> float:

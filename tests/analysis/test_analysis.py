@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from moveability import analyze, load_analysis
+from moveability import analyze, load_analysis, save_analysis
 from moveability.limits import JointLimit
 from moveability.mechanisms import FiveBar
 
@@ -294,7 +294,7 @@ def test_save_and_load_give_the_same_answers(tmp_path):
     m = _mechanism(*CASES[3])
     result = analyze(m, precision=0.2)
     path = tmp_path / "analysis.npz"
-    result.save(path)
+    save_analysis(result, path)
     again = load_analysis(path)
     assert again.to_dict() == result.to_dict()
     pts = np.random.default_rng(0).uniform(*m.bounds, (50, 2))

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from moveability import analyze, load_analysis
+from moveability import analyze, load_analysis, save_analysis
 from moveability.analysis.flows import into_corner
 from moveability.analysis.joint_space import count_in_joint_space, has_dyads
 from moveability.mechanisms import FiveBar, from_spec
@@ -160,7 +160,7 @@ def test_analyze_reports_the_tighter_bounds_and_saves_them(tmp_path):
     assert result.complete
     assert result.undecided["components"] == 0 and result.undecided["detached"] == 0
     path = tmp_path / "a.npz"
-    result.save(path)
+    save_analysis(result, path)
     again = load_analysis(path)
     assert again.count == result.count and again.joint_count == result.joint_count
     # generalized aspects are not the components of D: no joint-space count

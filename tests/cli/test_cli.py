@@ -474,7 +474,19 @@ def test_terminal_progress_line_appears_after_the_delay():
     quiet(3, 10, 20)
     assert stream.getvalue() == ""
     shown = TerminalProgress(stream, delay=0.0)
-    shown(4, 12, 40)
-    shown(5, 0, 52)
-    text = stream.getvalue()
-    assert "level 4" in text and "40 cells" in text and text.endswith("\n")
+    shown.phase("refining", levels=8)
+    shown(3, 12, 40)
+    shown(7, 0, 52)
+    shown.phase("joining the regions")
+    shown.phase("resolving", round=2, levels=20)
+    shown(9, 5, 60)
+    shown.close()
+    writes = stream.getvalue().split("\r\x1b[K")
+    # every update rewrites the whole line; the last one clears it
+    assert writes[0] == "" and writes[-1] == ""
+    assert "level 4/8" in writes[2] and "40 cells" in writes[2]
+    assert f"[{'#' * 24}] level 8/8" in writes[3]
+    assert writes[4].startswith("joining the regions")
+    assert writes[5].startswith("resolving the open cells: round 2")
+    assert writes[6].startswith("resolving the open cells: round 2, level 9")
+    assert "60 cells" in writes[6]

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from moveability import analyze, load_analysis
+from moveability import analyze, load_analysis, save_analysis
 from moveability.cli import main
 from moveability.errors import InvalidParameterError, SpecError
 from moveability.mechanisms import Biglide, ThreeRPR, from_spec
@@ -140,7 +140,7 @@ def test_precision_with_the_wrong_number_of_axes(rpr_file):
 def test_save_and_load_keep_the_periodic_axis(tmp_path):
     result = analyze(RPR, precision=(2.0, 2.0, 0.3))
     path = tmp_path / "rpr.npz"
-    result.save(path)
+    save_analysis(result, path)
     again = load_analysis(path)
     assert again.tree.periodic == (2,)
     assert again.precision == (2.0, 2.0, 0.3)

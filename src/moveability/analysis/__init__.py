@@ -6,6 +6,7 @@ the answers about poses.
 proves that no region hides in the undecided cells, :mod:`.joint_space` counts
 the regions of two-dyad mechanisms in their joint space, :mod:`.result` holds
 :func:`analyze` and :class:`Analysis` (regions, counts, point queries),
+:mod:`.saved` writes and reads analyses,
 :mod:`.planning` plans motions inside a region and :mod:`.wxq` builds the
 paper's W x Q tree directly.
 """
@@ -18,9 +19,9 @@ from .result import (
     Region,
     analyze,
     count_text,
-    load_analysis,
     resolve_analysis,
 )
+from .saved import load_analysis, save_analysis
 
 __all__ = [
     "RESOLVE_GROWTH",
@@ -32,4 +33,5 @@ __all__ = [
     "count_text",
     "load_analysis",
     "resolve_analysis",
+    "save_analysis",
 ]

@@ -8,7 +8,6 @@ from :mod:`moveability.analysis.regions`; every answer is three-valued.
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -22,11 +21,12 @@ from ..hypertree.keys import MAX_KEY_BITS
 from ..hypertree.measurement import leaf_volumes, locate
 from ..hypertree.status import BOUNDARY, IN, OUT
 from ..hypertree.topology import adjacency, refined_adjacency
-from ..hypertree.tree import HyperTree, read_archive
+from ..hypertree.tree import HyperTree
 from ..intervals import Interval
 from ..limits import INSIDE
 from ..mechanisms import Mechanism, from_spec
 from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR
+from ..spec import describe_spec
 from ..types import NO, UNKNOWN, YES, answer, word
 from .flows import (
     attached_nodes,
@@ -36,7 +36,7 @@ from .flows import (
     slot_spans,
     supports_flows,
 )
-from .joint_space import JointSpaceCount, count_in_joint_space
+from .joint_space import JointSpaceCount, count_in_joint_space, has_dyads
 from .regions import RegionGraph, region_graph
 from .sheets import SheetTable, classify_sheets, stack_tables
 
@@ -48,12 +48,10 @@ __all__ = [
     "Region",
     "analyze",
     "count_text",
-    "load_analysis",
     "resolve_analysis",
 ]
 
 Progress = Callable[[int, int, int], object]
-_FORMAT = "moveability.Analysis"
 #: levels below the precision that :func:`analyze` may refine to settle the count
 RESOLVE_LEVELS = 12
 #: leaves the resolution may add, as a multiple of the leaves of the plain pass
@@ -61,6 +59,28 @@ RESOLVE_LEVELS = 12
 RESOLVE_GROWTH = 2.0
 #: leaves split in one round of the resolution at most (those with open nodes first)
 RESOLVE_ROUND = 1 << 13
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """What an analysis proves beyond its tree and sheet table, kept in a saved
+    analysis so that loading it repeats no interval computation.
+
+    Attributes
+    ----------
+    pairs, face_pairs : (m, 2) int
+        Touching leaves (not OUT): by a shared vertex, by a shared face.
+    contact : (m,) bool
+        Per vertex pair: their common boundary holds a pose every leg reaches.
+    flows : tuple of arrays
+        The flows of the nodes that need a certificate: (nodes, bits, exists,
+        faces), see :func:`moveability.analysis.flows.flow_conditions`.
+    """
+
+    pairs: NDArray[np.intp]
+    face_pairs: NDArray[np.intp]
+    contact: NDArray[np.bool_]
+    flows: tuple[NDArray[Any], ...]
 
 
 @dataclass(frozen=True)
@@ -129,8 +149,8 @@ def _depths(
     if sum(depths) > MAX_KEY_BITS:
         raise ResolutionError(
             "precision",
-            f"a precision coarser than about {(hi - lo).max() / 2.0**(62 / len(lo)):.3g}",
-            precision,
+            f"a precision coarser than about {(hi - lo).max() / 2.0 ** (62 / len(lo)):.3g}",
+            _as_given(np.asarray(precision, dtype=np.float64)),
         )
     return depths
 
@@ -158,7 +178,9 @@ def analyze(
     max_leaves : int
         Fail with :class:`~moveability.ResolutionError` rather than hold more leaves.
     progress : callable, optional
-        Called as ``progress(level, n_split, n_leaves)`` while the tree grows.
+        Called as ``progress(level, n_split, n_leaves)`` while the tree grows;
+        if it has a ``phase`` method, that is called as each phase begins
+        (see :func:`phase`).
     generalized_aspects : bool, optional
         Forbid serial singularities as well (det A != 0 and det B != 0): the
         regions are then the generalized aspects, in which the posture never
@@ -230,6 +252,7 @@ def analyze(
         if progress is not None:
             progress(level, n_split, n_leaves)
 
+    phase(progress, "refining", levels=n_levels)
     # no merging: a parent is not certified by its children's certificates
     try:
         tree = HyperTree.build(
@@ -250,7 +273,11 @@ def analyze(
             precision,
         ) from None
     # two dyads: the count is also proved in the joint space (see moveability.analysis.joint_space)
-    joint = count_in_joint_space(mechanism) if resolve and not generalized_aspects else None
+    joint = None
+    if resolve and not generalized_aspects and has_dyads(mechanism):
+        phase(progress, "counting the regions in the joint space")
+        joint = count_in_joint_space(mechanism)
+    phase(progress, "joining the regions")
     result = Analysis(
         mechanism,
         _as_given(eps),
@@ -263,6 +290,19 @@ def analyze(
         budget = len(tree) + max(int(resolve_growth * len(tree)), 1 << 15)
         result = resolve_analysis(result, max_leaves=min(max_leaves, budget), progress=progress)
     return result
+
+
+def phase(progress: Progress | None, name: str, **info: int) -> None:
+    """Tell a progress display that a phase of the analysis begins, if it has a
+    ``phase(name, **info)`` method (a plain callable is only called per level).
+
+    The phases are ``refining`` (``levels``: the levels of the precision),
+    ``counting the regions in the joint space``, ``joining the regions``, and
+    ``resolving`` (``round``, and ``levels``: the deepest level allowed).
+    """
+    announce = getattr(progress, "phase", None)
+    if callable(announce):
+        announce(name, **info)
 
 
 def resolve_analysis(
@@ -278,6 +318,7 @@ def resolve_analysis(
     still rebuilds the graphs of the whole tree.
     """
     mechanism = result.mechanism
+    rounds = 0
     while True:
         tree = result.tree
         below = tree.levels < tree.layout.n_levels
@@ -301,6 +342,8 @@ def resolve_analysis(
         n_split = int(mask.sum())
         if not n_split:
             return result
+        rounds += 1
+        phase(progress, "resolving", round=rounds, levels=int(tree.layout.n_levels))
         finer, table, old_index = _split(mechanism, tree, result.table, mask)
         # a leaf where a region may hide is split twice: such leaves tend to stay
         # open for several levels, and each round costs the whole tree
@@ -527,6 +570,7 @@ class Analysis:
         table: SheetTable | None = None,
         flows_of: tuple[Analysis, NDArray[np.intp]] | None = None,
         joint_count: JointSpaceCount | None = None,
+        evidence: Evidence | None = None,
     ) -> None:
         self.mechanism = mechanism
         self.generalized_aspects = bool(generalized_aspects)
@@ -543,10 +587,16 @@ class Analysis:
         )
         self.areas = leaf_volumes(tree)
         live = np.flatnonzero(tree.status != OUT)
-        #: touching leaf pairs (not OUT), by a shared vertex and by a shared face
-        self._pairs = _touching(tree, tree.ndim, flows_of, "_pairs")
-        self._face_pairs = _touching(tree, 1, flows_of, "_face_pairs")
+        if evidence is None:
+            #: touching leaf pairs (not OUT), by a shared vertex and by a shared face
+            self._pairs = _touching(tree, tree.ndim, flows_of, "_pairs")
+            self._face_pairs = _touching(tree, 1, flows_of, "_face_pairs")
+            contact = _reachable_contact(mechanism, leaves, self.table, self._pairs)
+        else:
+            self._pairs, self._face_pairs = evidence.pairs, evidence.face_pairs
+            contact = evidence.contact
         pairs = self._pairs
+        self._contact = contact
         self._n_live = live.size
         self.graph: RegionGraph = region_graph(
             self.table,
@@ -554,10 +604,32 @@ class Analysis:
             mechanism.postures,
             cross_serial=not self.generalized_aspects,
             limits=mechanism.limits,
-            reachable_contact=_reachable_contact(mechanism, leaves, self.table, pairs),
+            reachable_contact=contact,
         )
-        self._attach(leaves, None if flows_of is None else (flows_of[0]._flows, flows_of[1]))
+        self._attach(
+            leaves,
+            None if flows_of is None else (flows_of[0]._flows, flows_of[1]),
+            None if evidence is None else evidence.flows,
+        )
         self._resolve()
+
+    def evidence(self) -> Evidence:
+        """What the analysis proved beyond its tree and sheet table (see
+        :class:`Evidence`), to be saved with them."""
+        return Evidence(self._pairs, self._face_pairs, self._contact, self._flows[:4])
+
+    @property
+    def cell_size(self) -> NDArray[np.float64]:
+        """Per pose axis, the width of the cells at the precision: the box halved
+        until at most the precision (the resolution may split finer)."""
+        lo, hi = self.tree.lo, self.tree.hi
+        depths = np.array(_depths(lo, hi, self.precisions), dtype=np.float64)
+        return np.asarray((hi - lo) / 2.0**depths, dtype=np.float64)
+
+    @property
+    def cell_text(self) -> str:
+        """:attr:`cell_size` for titles and summaries, 4 significant digits."""
+        return " x ".join(f"{v:.4g}" for v in self.cell_size)
 
     @property
     def precision_text(self) -> str:
@@ -565,18 +637,30 @@ class Analysis:
         return ", ".join(f"{v:g}" for v in np.atleast_1d(self.precision))
 
     # ------------------------------------------------------------ regions
-    def _attach(self, leaves: Any, reuse: tuple[Any, NDArray[np.intp]] | None = None) -> None:
+    def _attach(
+        self,
+        leaves: Any,
+        reuse: tuple[Any, NDArray[np.intp]] | None = None,
+        saved: tuple[NDArray[Any], ...] | None = None,
+    ) -> None:
         """Nodes whose every valid configuration joins a certified sheet (see
         :mod:`moveability.analysis.flows`); the others, alive and uncertified, are *open*:
         a region might hide there. ``reuse`` carries the flows of an analysis
         this one refines, with the old index of each leaf (-1 for new ones);
-        ``leaves`` are the tree's leaves."""
+        ``saved`` the flows (nodes, bits, exists, faces) of a saved analysis of
+        this tree; ``leaves`` are the tree's leaves."""
         t = self.table
         cross = not self.generalized_aspects
         done = [dead_or_certified(t, s, cross) for s in (1, -1)]
         nodes = np.argwhere(~done[0] | ~done[1])
         n, n_post = t.status.shape
-        if reuse is None:
+        if saved is not None:
+            saved_nodes, bits, exists, faces = saved
+            if not np.array_equal(saved_nodes, nodes):
+                raise InvalidParameterError(
+                    "path", "a saved analysis whose flows match its sheets", "a mismatch"
+                )
+        elif reuse is None:
             bits, exists, faces = flow_conditions(
                 self.mechanism, leaves.lo, leaves.hi, t, nodes, cross
             )
@@ -679,9 +763,7 @@ class Analysis:
         # possible components holding an open node: a region may hide there
         self._open_possible: list[NDArray[np.bool_]] = []
         for row in (0, 1):
-            labels = g.possible[row].reshape(len(self.areas), n_post, g.slots)[
-                self.open_nodes[row]
-            ]
+            labels = g.possible[row].reshape(len(self.areas), n_post, g.slots)[self.open_nodes[row]]
             flag = np.zeros(g.n_possible[row], dtype=bool)
             flag[labels[labels >= 0]] = True
             self._open_possible.append(flag)
@@ -1100,6 +1182,7 @@ class Analysis:
             "precision": (
                 list(self.precision) if isinstance(self.precision, tuple) else self.precision
             ),
+            "cell": [float(v) for v in self.cell_size],
             "pose": list(self.mechanism.pose_names),
             "workspace": {measure: list(self.workspace[measure])},
             "regions": [
@@ -1125,8 +1208,8 @@ class Analysis:
         measure = self.measure_name
         w = self.workspace[measure]
         lines = [
-            f"{self.mechanism!r}",
-            f"precision {self.precision_text}: {len(self.tree)} leaves",
+            describe_spec(self.mechanism.to_spec()),
+            f"precision {self.precision_text}: cells {self.cell_text}, {len(self.tree)} leaves",
             f"workspace {measure} in [{w[0]:.4f}, {w[1]:.4f}]",
             f"{count_text(*self.count)}:",
         ]
@@ -1144,52 +1227,3 @@ class Analysis:
         )
         lines.append(f"workspace N-connected: {word(self.n_connected)}")
         return "\n".join(lines)
-
-    @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> Analysis:
-        """Read an analysis written by :meth:`save` (see :func:`load_analysis`)."""
-        return load_analysis(path)
-
-    def save(self, path: str | os.PathLike[str]) -> None:
-        """Write the analysis (mechanism spec, precision, tree) to a ``.npz`` file."""
-        np.savez_compressed(
-            path,
-            format=np.array(_FORMAT),
-            spec=np.array(json.dumps(self.mechanism.to_spec())),
-            precision=self.precisions,
-            generalized_aspects=np.array(self.generalized_aspects),
-            lo=self.tree.lo,
-            hi=self.tree.hi,
-            max_depth=np.asarray(self.tree.max_depth),
-            keys=self.tree.keys,
-            levels=self.tree.levels,
-            status=self.tree.status,
-            joint_count=np.array(self.joint_count is not None),
-        )
-
-
-def load_analysis(path: str | os.PathLike[str]) -> Analysis:
-    """Read an analysis written by :meth:`Analysis.save` (the sheets, and the count in
-    the joint space where it was sought, are certified again)."""
-    fields = read_archive(path, "a file written by Analysis.save")
-    if str(fields.get("format", "")) != _FORMAT:
-        raise InvalidParameterError("path", "a file written by Analysis.save", os.fspath(path))
-    mechanism = from_spec(json.loads(str(fields["spec"])))
-    tree = HyperTree(
-        fields["lo"],
-        fields["hi"],
-        tuple(int(d) for d in fields["max_depth"]),
-        fields["keys"],
-        fields["levels"],
-        fields["status"],
-        mechanism.periodic_axes,
-    )
-    aspects = bool(fields["generalized_aspects"]) if "generalized_aspects" in fields else False
-    precision = np.atleast_1d(np.asarray(fields["precision"], dtype=np.float64))
-    # the joint-space count is proved again, like the sheets (it is deterministic)
-    flag = fields.get("joint_count")
-    sought = flag is not None and flag.shape == () and flag.dtype == bool and bool(flag)
-    joint = count_in_joint_space(mechanism) if sought and not aspects else None
-    return Analysis(
-        mechanism, _as_given(precision), tree, generalized_aspects=aspects, joint_count=joint
-    )

@@ -1,11 +1,11 @@
 """Command-line interface: ``moveability``.
 
-One module per command (:mod:`.regions`, :mod:`.locate`, :mod:`.feasible`,
-:mod:`.plan`, :mod:`.plot`,
-:mod:`.report`, :mod:`.export`, :mod:`.sweep`),
-shared options in :mod:`.options`, how a command runs (logging, progress, errors)
-in :mod:`.running`, what it prints in :mod:`.printing`. Results go to stdout (a summary, or JSON
-with ``--json -``), logs to stderr. Bad input exits with status 2 and the one
+One module per command (:mod:`.analyze`, :mod:`.regions`, :mod:`.locate`,
+:mod:`.feasible`, :mod:`.plan`, :mod:`.plot`, :mod:`.report`, :mod:`.export`,
+:mod:`.sweep`), shared options in :mod:`.options`, how a command runs (logging,
+progress, errors) in :mod:`.running`, its output files in :mod:`.files`, what it
+prints in :mod:`.printing`. Results go to stdout (a summary, or JSON with
+``--json -``), logs to stderr. Bad input exits with status 2 and the one
 line ``Error: <message>`` on stderr.
 
 Examples
@@ -24,6 +24,7 @@ import click
 
 from .. import __version__
 from . import running
+from .analyze import analyze_command
 from .export import export_command
 from .feasible import feasible_command
 from .locate import locate_command
@@ -56,6 +57,7 @@ def main(ctx: click.Context, verbose: int, quiet: int) -> None:
     running.configure_logging(verbose - quiet)
 
 
+main.add_command(analyze_command)
 main.add_command(regions_command)
 main.add_command(locate_command)
 main.add_command(feasible_command)

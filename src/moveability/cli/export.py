@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import click
 
 from ..errors import InputError
 from . import options, printing, running
+from .files import check_folder, folder_written_whole
 
 __all__ = ["export_command", "format_export"]
 
@@ -33,7 +35,6 @@ def format_export(data: Mapping[str, Any]) -> str:
     "--out",
     "out",
     required=True,
-    type=click.Path(file_okay=False),
     help="Directory to write region-<id>.vtu and undecided.vtu into (created if missing).",
 )
 @options.precision_option
@@ -58,11 +59,18 @@ def export_command(
                 f"refusing to overwrite {os.path.join(out, taken[0])}: --out holds .vtu files "
                 "(use --overwrite)"
             )
+    check_folder(out, "--out", overwrite)
     with running.reporting_errors():
-        mechanism = running.load_mechanism(spec)
-        result = running.run_analysis(mechanism, precision, running.progress_reporter())
+        result = running.open_analysis(spec, precision)
         from ..output.vtk import export_vtk, exported_files
 
-        files = exported_files(result, export_vtk(result, out))
-        data = {"precision": result.precision, "pose": list(mechanism.pose_names), "files": files}
+        with folder_written_whole(out) as temporary:
+            written = export_vtk(result, temporary)
+        moved = [Path(out) / path.name for path in written]
+        files = exported_files(result, moved)
+        data = {
+            "precision": result.precision,
+            "pose": list(result.mechanism.pose_names),
+            "files": files,
+        }
     printing.write_output(data, json_out, overwrite, format_export)

@@ -71,6 +71,16 @@ def plan_command(
         try:
             data = plan_motion(result, poses)
         except PlanningError as error:
+            if json_out is not None:
+                # the answer as feasible gives it, with the reason: JSON that pipes
+                answer = result.feasible(poses)
+                failed = {
+                    "feasible": answer["feasible"],
+                    "region": None,
+                    "path": [],
+                    "reason": str(error),
+                }
+                printing.write_output(failed, json_out, overwrite, lambda _: "")
             click.echo(f"Error: no motion: {error}", err=True)
             raise SystemExit(NO_MOTION) from None
     printing.write_output(data, json_out, overwrite, format_plan)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import os
+from typing import Any
 
 import click
 import numpy as np
@@ -11,6 +11,7 @@ from ..errors import InputError
 from ..extras import require
 from ..poses import read_points
 from . import options, running
+from .files import check_file, written_whole
 
 __all__ = ["plot_command"]
 
@@ -21,10 +22,36 @@ def _pose(text: str | None) -> np.ndarray | None:
     try:
         values = [float(v) for v in text.split(",")]
     except ValueError:
-        raise InputError(f"invalid --pose: expected x,y numbers, got {text!r}") from None
+        raise InputError(
+            f"invalid --pose: expected numbers separated by commas, got {text!r}"
+        ) from None
     if not np.isfinite(values).all():
         raise InputError(f"invalid --pose: expected finite numbers, got {text!r}")
     return np.array(values)
+
+
+def _check_pose(at: np.ndarray, mechanism: Any) -> None:
+    """Refuse a ``--pose`` of the wrong length, or one that no posture reaches."""
+    names = tuple(mechanism.pose_names)
+    if at.shape != (len(names),):
+        raise InputError(
+            f"invalid --pose: expected {len(names)} numbers ({','.join(names)}), got {at.size}"
+        )
+    q = np.asarray(mechanism.joint_angles(at[None, :]))[0]
+    shown = ", ".join(f"{v:g}" for v in at)
+    reached = np.isfinite(q).all(axis=-1)
+    if not reached.any():
+        raise InputError(
+            f"invalid --pose: no posture reaches ({shown}): it lies outside the workspace"
+        )
+    within = reached.copy()
+    for i, lim in enumerate(mechanism.limits):
+        within[reached] &= np.asarray(lim.contains(q[reached, i]), dtype=bool)
+    if not within.any():
+        raise InputError(
+            f"invalid --pose: no posture within the joint limits reaches ({shown}): it lies "
+            "outside the workspace"
+        )
 
 
 def _check_figure(name: str, mechanism: object) -> None:
@@ -57,14 +84,12 @@ def _check_figure(name: str, mechanism: object) -> None:
     "--out",
     "out",
     required=True,
-    type=click.Path(dir_okay=False),
     help="Output file: .png or .svg (.gif with --animate).",
 )
 @click.option("--pose", default=None, help="Pose x,y for the postures figure.")
 @click.option(
     "--points",
     default=None,
-    type=click.Path(dir_okay=False),
     help="CSV of poses for the path figure (default: two poses of the largest region).",
 )
 @click.option(
@@ -91,43 +116,56 @@ def plot_command(
     overwrite: bool,
     precision: float,
 ) -> None:
-    """Draw one figure of the analysis of the manipulator of SPEC."""
+    """Draw one figure of the analysis of the manipulator of SPEC (a spec file, or an
+    analysis saved by ``moveability analyze --out``)."""
     from ..errors import PlanningError
 
-    ext = os.path.splitext(out)[1].lower()
-    allowed = (".gif",) if animate else (".png", ".svg")
-    if ext not in allowed:
-        raise InputError(
-            f"invalid --out: expected a {' or '.join(allowed)} file, got {out!r}"
-        )
     if animate and name != "path":
         raise InputError("invalid --animate: only the path figure is animated")
+    check_file(out, "--out", overwrite, (".gif",) if animate else (".png", ".svg"))
     if phis and name != "slices":
         raise InputError("invalid --phi: only the slices figure takes angles")
     if not all(np.isfinite(phis)):
         raise InputError(f"invalid --phi: expected finite angles, got {list(phis)!r}")
-    if os.path.exists(out) and not overwrite:
-        raise InputError(f"refusing to overwrite {out}: it exists (use --overwrite)")
+    if pose is not None and name != "postures":
+        raise InputError("invalid --pose: only the postures figure takes a pose")
     at = _pose(pose)
     with running.reporting_errors():
         require("matplotlib", "plot", "figures")
-        mechanism = running.load_mechanism(spec)
+        saved = running.open_analysis(spec, precision) if running.is_saved(spec) else None
+        mechanism = saved.mechanism if saved is not None else running.load_mechanism(spec)
         _check_figure(name, mechanism)
+        if at is not None:
+            _check_pose(at, mechanism)
         poses = read_points(points, mechanism.pose_names) if points else None
-        result = running.run_analysis(mechanism, precision, running.progress_reporter())
         from ..analysis.planning import default_poses, plan_motion
-        from ..output.plot import animate_path, figure
+        from ..output.plot import animate_path, figure, plot_postures
 
+        result: Any = None  # the postures at a given pose need no analysis
+        if name != "postures" or at is None:
+            result = saved
+            if result is None:
+                result = running.open_analysis(spec, precision, mechanism=mechanism)
         try:
-            motion = None
-            if name == "path":
-                motion = plan_motion(result, poses if poses is not None else default_poses(result))
-            if motion is not None and animate:
-                animate_path(result, motion, out)
-            else:
-                angles = np.radians(phis) if phis else None
-                fig = figure(name, result, pose=at, motion=motion, phis=angles)
-                fig.savefig(out, dpi=110, bbox_inches="tight")
+            with written_whole(out) as temporary:
+                if result is None and at is not None:
+                    fig = plot_postures(mechanism, at)
+                    fig.savefig(temporary, dpi=110, bbox_inches="tight")
+                elif name == "path":
+                    motion = plan_motion(
+                        result, poses if poses is not None else default_poses(result)
+                    )
+                    if animate:
+                        running.status(f"drawing the animation of {out}")
+                        animate_path(result, motion, temporary)
+                    else:
+                        figure(name, result, motion=motion).savefig(
+                            temporary, dpi=110, bbox_inches="tight"
+                        )
+                else:
+                    angles = np.radians(phis) if phis else None
+                    fig = figure(name, result, pose=at, phis=angles)
+                    fig.savefig(temporary, dpi=110, bbox_inches="tight")
         except PlanningError as error:
             click.echo(f"Error: no motion: {error}", err=True)
             raise SystemExit(3) from None

@@ -12,6 +12,7 @@ import click
 import numpy as np
 
 from ..errors import InputError
+from .files import check_file, written_whole
 
 __all__ = ["check_output", "format_table", "write_output"]
 
@@ -22,11 +23,7 @@ def check_output(json_out: str | None, overwrite: bool) -> None:
     """Refuse early, before any computation, a ``--json`` file that cannot be written."""
     if json_out is None or json_out == "-":
         return
-    if os.path.exists(json_out) and not overwrite:
-        raise InputError(f"refusing to overwrite {json_out}: it exists (use --overwrite)")
-    parent = os.path.dirname(os.path.abspath(json_out))
-    if not os.path.isdir(parent):
-        raise InputError(f"cannot write {json_out}: no directory {parent}")
+    check_file(json_out, "--json", overwrite)
 
 
 def _jsonable(value: Any) -> Any:
@@ -62,17 +59,18 @@ def write_output(
         if json_out == "-":
             click.echo(text, nl=False)
             return
+        if os.path.lexists(json_out) and not overwrite:
+            raise InputError(f"refusing to overwrite {json_out}: it exists (use --overwrite)")
         try:
-            with open(json_out, "w" if overwrite else "x", encoding="utf-8") as stream:
-                stream.write(text)
-        except FileExistsError:
-            raise InputError(
-                f"refusing to overwrite {json_out}: it exists (use --overwrite)"
-            ) from None
+            with written_whole(json_out) as temporary:
+                with open(temporary, "w", encoding="utf-8") as stream:
+                    stream.write(text)
         except OSError as error:
             raise InputError(f"cannot write {json_out}: {error.strerror or error}") from None
         logger.info("wrote %s", json_out)
-    click.echo(summary(data))
+    shown = summary(data)
+    if shown:
+        click.echo(shown)
 
 
 def format_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:

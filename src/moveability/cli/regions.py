@@ -41,7 +41,9 @@ def format_regions(data: Mapping[str, Any]) -> str:
     measure = "volume" if "volume" in data["workspace"] else "area"
     eps = data["precision"]
     lines = [
-        "precision: " + (", ".join(f"{v:g}" for v in eps) if isinstance(eps, list) else f"{eps:g}"),
+        "precision: "
+        + (", ".join(f"{v:g}" for v in eps) if isinstance(eps, list) else f"{eps:g}")
+        + (f" (cells {' x '.join(f'{v:.4g}' for v in data['cell'])})" if "cell" in data else ""),
         f"workspace {measure}: {_area(data['workspace'][measure])}",
         (
             f"generalized aspects: {_count(data)}"
@@ -103,18 +105,13 @@ def regions_command(
 ) -> None:
     """The N-connected regions of the workspace of the manipulator of SPEC.
 
-    SPEC is a TOML file naming the mechanism, its parameters and joint limits.
-    Areas are given as [inner, outer] bounds; three-valued answers are
-    true, false or null (unknown at this precision).
+    SPEC is a TOML file naming the mechanism, its parameters and joint limits,
+    or an analysis saved by ``moveability analyze --out``. Areas are given as
+    [inner, outer] bounds; three-valued answers are true, false or null
+    (unknown at this precision).
     """
     printing.check_output(json_out, overwrite)
     with running.reporting_errors():
-        mechanism = running.load_mechanism(spec)
-        result = running.run_analysis(
-            mechanism,
-            precision,
-            running.progress_reporter(),
-            **running.analysis_options(generalized_aspects),
-        )
+        result = running.open_analysis(spec, precision, generalized_aspects)
         data = result.to_dict()
     printing.write_output(data, json_out, overwrite, format_regions)

@@ -11,6 +11,7 @@ import click
 from ..errors import InputError
 from ..extras import require
 from . import options, running
+from .files import check_file, written_whole
 
 __all__ = ["sweep_command"]
 
@@ -138,7 +139,10 @@ def sweep_command(
         varies = [parse_vary(text, base) for text in vary]
         check_varies(varies)
         table_format(out)
+        # the table is resumed and the map drawn again: both may exist already
+        check_file(out, "--out", overwrite=True)
         if figure_out is not None:
+            check_file(figure_out, "--figure", True, (".png", ".svg", ".pdf"))
             require("matplotlib", "plot", "the sweep figure (--figure)")
             several = [v.name for v in varies if len(set(v.values)) > 1]
             if len(several) != 2:
@@ -160,7 +164,8 @@ def sweep_command(
         if figure_out is not None:
             from ..sweep import plot_sweep_map
 
-            plot_sweep_map(out).savefig(figure_out, dpi=150)
+            with written_whole(figure_out) as temporary:
+                plot_sweep_map(out).savefig(temporary, dpi=150)
     click.echo(
         f"{summary['designs']} designs: {summary['computed']} computed, "
         f"{summary['skipped']} already in {out}, {summary['failed']} failed"
