@@ -51,7 +51,7 @@ def saved(tmp_path_factory):
 
 @pytest.fixture
 def no_computation(monkeypatch):
-    """Make any analysis or interval classification fail: the command must not compute."""
+    """Make any analysis fail: the command must not compute. Returns the refusal."""
 
     def refuse(*args, **kwargs):
         raise AssertionError("computed again")
@@ -64,6 +64,7 @@ def no_computation(monkeypatch):
 
     monkeypatch.setattr(running, "run_analysis", refuse)
     monkeypatch.setattr(HyperTree, "build", refuse)
+    return refuse
 
 
 @pytest.fixture(scope="module")
@@ -123,10 +124,12 @@ def test_every_command_answers_from_the_file_without_computing(
 
 def test_loading_repeats_no_interval_work(saved, monkeypatch):
     expected = analyze(load_spec(PAPER), precision=float(EPS))
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("interval work on loading")
+
     for name in ("classify_sheets", "flow_conditions", "count_in_joint_space"):
-        monkeypatch.setattr(
-            result_module, name, lambda *a, **k: (_ for _ in ()).throw(AssertionError(name))
-        )
+        monkeypatch.setattr(result_module, name, refuse)
     again = load_analysis(saved)
     assert again.to_dict() == expected.to_dict()
     assert again.joint_count == expected.joint_count
@@ -206,7 +209,7 @@ def test_unwritable_outputs_are_refused_before_computing(
 ):
     import moveability.sweep as sweep
 
-    monkeypatch.setattr(sweep, "run_sweep", lambda *a, **k: (_ for _ in ()).throw(AssertionError))
+    monkeypatch.setattr(sweep, "run_sweep", no_computation)
     a_file = tmp_path / "plain-file"
     a_file.write_text("x")
     values = {"missing": str(tmp_path / "no" / "such"), "file": str(a_file), "dir": str(tmp_path)}
