@@ -42,6 +42,7 @@ def report_command(spec: str, out: str, overwrite: bool, precision: float) -> No
             motion, why = plan_motion(result, default_poses(result)), ""
         except PlanningError as error:
             motion, why = None, str(error)
+        running.status(f"drawing the figures of {out}")
         with folder_written_whole(out) as temporary:
             written = write_report(result, temporary, motion, no_motion=why)
         path = os.path.join(out, os.path.basename(written))
