@@ -9,6 +9,12 @@ of the leaf, and the posture changes at the fold point, where the branches
 meet. Joint angles come from the closed-form inverse kinematics of the current
 posture; segments are subdivided until consecutive configurations are at most
 ``step`` apart in pose and in every joint.
+
+That chain of cells zigzags. By default it is then shortened and smoothed
+(:mod:`moveability.analysis.smoothing`): each stretch of one posture is cut
+short by straight shortcuts and its corners are rounded, every new segment
+proved valid over boxes covering it; the poses asked and the posture changes
+stay where the chain put them.
 """
 
 from __future__ import annotations
@@ -17,20 +23,27 @@ import itertools
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from scipy.sparse.csgraph import breadth_first_order
 
-from ..errors import PlanningError
+from ..errors import InvalidParameterError, PlanningError
 from ..hypertree.measurement import locate
 from ..hypertree.status import IN
 from ..mechanisms.base import REGULAR
 from ..types import Array
 from .sheets import classify_sheets
+from .smoothing import path_length, smooth_path
 
 if TYPE_CHECKING:
+    from ..hypertree.tree import Leaves
     from .result import Analysis
 
 __all__ = ["PlanningError", "default_poses", "plan_motion"]
+
+#: proofs of shortcuts bisect their boxes down to the analysis precision over this
+_REFINE = 8.0
+#: passes of shortening and smoothing
+_PASSES = 2
 
 
 def _start_nodes(analysis: Analysis, point: Array, leaf: int, component: int) -> list[int]:
@@ -63,10 +76,11 @@ def _route(analysis: Analysis, start: int, goal: int) -> list[int]:
     return path[::-1]
 
 
-def _touching(analysis: Analysis, lo_u: Array, hi_u: Array, leaf: int, offset: Array) -> Array:
+def _touching(
+    analysis: Analysis, leaves: Leaves, lo_u: Array, hi_u: Array, leaf: int, offset: Array
+) -> Array:
     """The shift of ``leaf`` (by whole turns of the periodic axes, near ``offset``) that
     makes it touch the box ``[lo_u, hi_u]``: paths cross the seam of a periodic axis."""
-    leaves = analysis.tree.leaves()
     shift = offset.copy()
     for axis in analysis.mechanism.periodic_axes:
         for turns in (0.0, -1.0, 1.0):
@@ -88,9 +102,8 @@ class _Fold:
     ``fold_anchor`` and ``fold_path``).
     """
 
-    def __init__(self, analysis: Analysis, leaf: int, offset: Array) -> None:
+    def __init__(self, analysis: Analysis, leaves: Leaves, leaf: int, offset: Array) -> None:
         t = analysis.table
-        leaves = analysis.tree.leaves()
         self.lo, self.hi, self.offset = leaves.lo[leaf], leaves.hi[leaf], offset
         legs = tuple(int(i) for i in np.flatnonzero(t.folding[leaf]))
         self.leg: Any = None
@@ -120,7 +133,12 @@ class _Fold:
 
 
 def _waypoints(
-    analysis: Analysis, nodes: list[int], begin: Array, end: Array, offset: Array
+    analysis: Analysis,
+    leaves: Leaves,
+    nodes: list[int],
+    begin: Array,
+    end: Array,
+    offset: Array,
 ) -> tuple[list[tuple[Array, int]], Array]:
     """Poses and postures between which the pose moves in straight segments.
 
@@ -132,10 +150,9 @@ def _waypoints(
     """
     t = analysis.table
     n_post = t.status.shape[1]
-    leaves = analysis.tree.leaves()
 
     def fold(leaf: int) -> _Fold | None:
-        return _Fold(analysis, leaf, offset) if t.folding[leaf].any() else None
+        return _Fold(analysis, leaves, leaf, offset) if t.folding[leaf].any() else None
 
     current = begin + offset
     out: list[tuple[Array, int]] = [(current, nodes[0] % n_post)]
@@ -151,7 +168,7 @@ def _waypoints(
             continue
         # through the middle of the face (edge, corner) the two leaves share
         lo_u, hi_u = leaves.lo[lu] + offset, leaves.hi[lu] + offset
-        shift = _touching(analysis, lo_u, hi_u, lv, offset)
+        shift = _touching(analysis, leaves, lo_u, hi_u, lv, offset)
         lo_v, hi_v = leaves.lo[lv] + shift, leaves.hi[lv] + shift
         shared = 0.5 * (np.maximum(lo_u, lo_v) + np.minimum(hi_u, hi_v))
         if here is not None:
@@ -166,33 +183,101 @@ def _waypoints(
     return out, offset
 
 
-def _joints(analysis: Analysis, poses: Array, posture: int) -> Array:
+def _joints(analysis: Analysis, poses: Array, postures: NDArray[np.intp]) -> Array:
+    """Joint angles of each pose in its posture."""
     # the poses of a plan are certified reachable: forgive the rounding at folds
-    q = analysis.mechanism.joint_angles(poses, clip=True)[:, posture, :]
-    return q
+    q = analysis.mechanism.joint_angles(poses, clip=True)
+    return q[np.arange(poses.shape[0]), np.asarray(postures, dtype=np.intp)]
 
 
-def _densify(
-    analysis: Analysis, a: Array, b: Array, posture: int, step: float
-) -> tuple[Array, Array]:
-    """Poses from a to b (a excluded) and their joints, consecutive ones within ``step``."""
-    n = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
-    s = np.linspace(0.0, 1.0, n + 1)
+def _joint_moves(analysis: Analysis, dq: Array) -> Array:
+    """How far each joint moves for joint differences ``dq``: a revolute joint by the
+    shorter way round, a prismatic one by the difference."""
+    turn = np.abs(np.angle(np.exp(1j * dq)))
+    prismatic = np.array([lim.prismatic for lim in analysis.mechanism.limits], dtype=bool)
+    return np.where(prismatic, np.abs(dq), turn)
+
+
+def _walk(
+    analysis: Analysis, vertices: Array, postures: NDArray[np.intp], step: float
+) -> tuple[Array, NDArray[np.intp], NDArray[np.intp]]:
+    """The motion along straight segments between ``vertices`` (each segment in the
+    posture of its end), consecutive configurations within ``step`` in pose and in
+    every joint; with the index in it of each vertex.
+
+    Each segment is cut evenly to the step in pose, then pieces where a joint moves
+    more are halved until none does; all segments at once, since the inverse
+    kinematics of some legs costs most per call.
+    """
+    a, b = vertices[:-1], vertices[1:]
+    if not a.shape[0]:
+        return vertices, postures, np.zeros(1, dtype=np.intp)
+    counts = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / step)).astype(np.intp)
+    seg = np.repeat(np.arange(a.shape[0]), counts + 1)
+    s = np.concatenate([np.linspace(0.0, 1.0, c + 1) for c in counts])
     for _ in range(60):
-        poses = a + s[:, None] * (b - a)
-        q = _joints(analysis, poses, posture)
-        jump = np.abs(np.angle(np.exp(1j * np.diff(q, axis=0)))).max(axis=1)
-        bad = np.flatnonzero(jump > step)
+        poses = a[seg] + s[:, None] * (b - a)[seg]
+        q = _joints(analysis, poses, postures[1:][seg])
+        jump = _joint_moves(analysis, np.diff(q, axis=0)).max(axis=1)
+        bad = np.flatnonzero((jump > step) & (seg[1:] == seg[:-1]))
         if not bad.size:
-            return poses[1:], q[1:]
-        s = np.sort(np.concatenate([s, 0.5 * (s[bad] + s[bad + 1])]))
-    raise PlanningError("could not subdivide a segment to the requested step")
+            break
+        seg = np.concatenate([seg, seg[bad]])
+        s = np.concatenate([s, 0.5 * (s[bad] + s[bad + 1])])
+        order = np.lexsort((s, seg))
+        seg, s = seg[order], s[order]
+    else:
+        raise PlanningError("could not subdivide a segment to the requested step")
+    # a segment's start is the previous one's end, or the first vertex
+    later = s > 0.0
+    out = np.concatenate([vertices[:1], poses[later]])
+    post = np.concatenate([postures[:1], postures[1:][seg[later]]]).astype(np.intp)
+    per_segment = np.bincount(seg[later], minlength=a.shape[0])
+    at = np.concatenate([[0], np.cumsum(per_segment)]).astype(np.intp)
+    return out, post, at
+
+
+def _chain(
+    analysis: Analysis, p: Array, component: int
+) -> tuple[Array, NDArray[np.intp], NDArray[np.intp]]:
+    """Corners of the motion along the certain graph through the poses ``p``: poses,
+    postures, and the index of the corner where each pose is reached."""
+    n_post = analysis.table.status.shape[1]
+    leaves = analysis.tree.leaves()
+    _, leaf = locate(analysis.tree, p)
+    current = _start_nodes(analysis, p[0], int(leaf[0]), component)[0]
+    corners: list[tuple[Array, int]] = [(p[0], current % n_post)]
+    reached = [0]
+    offset = np.zeros(p.shape[1])
+    for i in range(1, p.shape[0]):
+        goals = _start_nodes(analysis, p[i], int(leaf[i]), component)
+        route = _route(analysis, current, goals[0])
+        waypoints, offset = _waypoints(analysis, leaves, route, p[i - 1], p[i], offset)
+        corners += waypoints[1:]
+        reached.append(len(corners) - 1)
+        current = route[-1]
+    poses = np.stack([c[0] for c in corners])
+    postures = np.array([c[1] for c in corners], dtype=np.intp)
+    return poses, postures, np.array(reached, dtype=np.intp)
+
+
+def _lengths(analysis: Analysis, poses: Array, joints: Array) -> tuple[float, float]:
+    """Euclidean length of a motion in pose coordinates and in joint coordinates."""
+    dq = _joint_moves(analysis, np.diff(joints, axis=0))
+    return path_length(poses), float(np.linalg.norm(dq, axis=1).sum())
 
 
 def plan_motion(
-    analysis: Analysis, points: ArrayLike, step: float | None = None
+    analysis: Analysis, points: ArrayLike, step: float | None = None, smooth: bool = True
 ) -> dict[str, Any]:
     """A continuous motion through ``points`` in order, inside one region.
+
+    The motion first follows a chain of cells of the certain graph (it
+    zigzags from cell to cell). With ``smooth``, every stretch of it that
+    keeps one posture is then shortened by straight shortcuts and its corners
+    are cut, each new segment proved valid by interval arithmetic over boxes
+    covering it (see :mod:`moveability.analysis.smoothing`); posture changes
+    and the poses asked stay where they were.
 
     Parameters
     ----------
@@ -203,20 +288,42 @@ def plan_motion(
     step : float, optional
         Consecutive configurations are at most ``step`` apart in pose and in
         each joint (default: the smallest precision of the analysis).
+    smooth : bool, default True
+        Shorten and smooth the motion; False gives the chain of cells as it is.
 
     Returns
     -------
     dict
         ``{"feasible": True, "region": id, "path": [{"pose", "joints",
-        "posture"}, ...]}``. Every configuration satisfies the constraints,
-        keeps the region's sign of det A and respects the limits. Periodic
-        pose angles are continuous along the path: a pose may be reached one
-        or more whole turns away from the value asked.
+        "posture"}, ...], "waypoints": [index, ...], "length": {"pose":
+        {"before", "after"}, "joints": {"before", "after"}}}``. Every
+        configuration satisfies the constraints, keeps the region's sign of
+        det A and respects the limits. ``waypoints`` holds the index in
+        ``path`` where each pose asked is reached (the first is 0, the last
+        ``len(path) - 1``). ``length`` gives the Euclidean length of the
+        motion in pose coordinates and in joint coordinates, before and after
+        smoothing (equal without it). Periodic pose angles are continuous
+        along the path: a pose may be reached one or more whole turns away
+        from the value asked.
 
     Raises
     ------
     PlanningError
         When no region is known to hold every pose (exit 3 in the CLI).
+    InvalidParameterError
+        When ``step`` is not a positive length.
+
+    Notes
+    -----
+    Shortcutting is greedy: from each kept configuration, the farthest later
+    one of the same stretch that a proved shortcut reaches, found by doubling
+    and then narrowing down (a few batches of proofs per kept configuration,
+    the stretches sharing each batch). Three rounds of corner cutting follow;
+    then a second pass of both over the result. Each proof bisects the boxes
+    covering a segment down to an eighth of the analysis precision along each
+    axis, so a shortcut that only a finer look would prove is not taken. The
+    cost is a few dozen calls of
+    :func:`~moveability.analysis.sheets.classify_sheets`, on batches of boxes.
 
     Examples
     --------
@@ -224,49 +331,71 @@ def plan_motion(
     >>> from moveability.mechanisms import FiveBar
     >>> result = analyze(FiveBar(), precision=0.2)
     >>> motion = plan_motion(result, [[1.0, 3.0], [5.0, 3.0]])
-    >>> motion["feasible"], motion["path"][0]["pose"]
-    (True, [1.0, 3.0])
+    >>> motion["feasible"], motion["path"][0]["pose"], motion["waypoints"][0]
+    (True, [1.0, 3.0], 0)
+    >>> motion["length"]["pose"]["after"] <= motion["length"]["pose"]["before"]
+    True
     """
     points = analysis.as_poses(points)
+    step = _check_step(analysis, step)
     answer = analysis.feasible(points)
     if not answer["feasible"]:
         raise PlanningError(_apart_message(analysis, points, answer["feasible"]))
     region = analysis.regions[answer["region"]]
-    step = float(analysis.precisions.min()) if step is None else float(step)
     p = np.asarray(points, dtype=np.float64).reshape(-1, len(analysis.mechanism.pose_names))
-    _, leaf = locate(analysis.tree, p)
-    component = region.certain
-    current = _start_nodes(analysis, p[0], int(leaf[0]), component)[0]
-    poses = [p[0][None, :]]
-    postures = [np.array([current % analysis.table.status.shape[1]])]
-    offset = np.zeros(p.shape[1])
-    for i in range(1, p.shape[0]):
-        goals = _start_nodes(analysis, p[i], int(leaf[i]), component)
-        route = _route(analysis, current, goals[0])
-        waypoints, offset = _waypoints(analysis, route, p[i - 1], p[i], offset)
-        for (a, _), (b, posture) in itertools.pairwise(waypoints):
-            seg, _ = _densify(analysis, a, b, posture, step)
-            poses.append(seg)
-            postures.append(np.full(seg.shape[0], posture))
-        current = route[-1]
-    all_poses = np.concatenate(poses)
-    all_postures = np.concatenate(postures)
-    q = analysis.mechanism.joint_angles(all_poses, clip=True)
-    joints = q[np.arange(all_poses.shape[0]), all_postures]
-    joints = _present(analysis, joints)
-    _check(analysis, all_poses, joints, region.sign)
+    corners, corner_postures, reached = _chain(analysis, p, region.certain)
+    poses, postures, at = _walk(analysis, corners, corner_postures, step)
+    joints = _present(analysis, _joints(analysis, poses, postures))
+    waypoints = at[reached]
+    before = _lengths(analysis, poses, joints)
+    if smooth:
+        fixed = np.zeros(poses.shape[0], dtype=bool)
+        fixed[waypoints] = True
+        corners, corner_postures, origin = smooth_path(
+            analysis.mechanism,
+            poses,
+            postures,
+            fixed,
+            region.sign,
+            resolution=analysis.precisions / _REFINE,
+            passes=_PASSES,
+            spacing=step,
+        )
+        poses, postures, at = _walk(analysis, corners, corner_postures, step)
+        where = {int(o): int(a) for o, a in zip(origin, at, strict=True) if o >= 0}
+        waypoints = np.array([where[int(w)] for w in waypoints], dtype=np.intp)
+        joints = _present(analysis, _joints(analysis, poses, postures))
+    after = _lengths(analysis, poses, joints)
+    _check(analysis, poses, joints, region.sign)
     return {
         "feasible": True,
         "region": region.id,
         "path": [
             {
-                "pose": [float(v) for v in all_poses[k]],
+                "pose": [float(v) for v in poses[k]],
                 "joints": [float(v) for v in joints[k]],
-                "posture": analysis.mechanism.posture_name(int(all_postures[k])),
+                "posture": analysis.mechanism.posture_name(int(postures[k])),
             }
-            for k in range(all_poses.shape[0])
+            for k in range(poses.shape[0])
         ],
+        "waypoints": [int(w) for w in waypoints],
+        "length": {
+            "pose": {"before": before[0], "after": after[0]},
+            "joints": {"before": before[1], "after": after[1]},
+        },
     }
+
+
+def _check_step(analysis: Analysis, step: float | None) -> float:
+    if step is None:
+        return float(analysis.precisions.min())
+    try:
+        value = float(step)
+    except (TypeError, ValueError):
+        raise InvalidParameterError("step", "a positive length", step) from None
+    if not (np.isfinite(value) and value > 0):
+        raise InvalidParameterError("step", "a positive length", step)
+    return value
 
 
 def _present(analysis: Analysis, joints: Array) -> Array:
@@ -281,14 +410,18 @@ def _present(analysis: Analysis, joints: Array) -> Array:
 
 
 def _check(analysis: Analysis, poses: Array, joints: Array, sign: int) -> None:
+    """Every configuration solves the constraints, has det A of ``sign`` and is within
+    the limits: a failure is a bug, reported as such."""
     m = analysis.mechanism
-    residual = np.abs(m.constraints(poses, joints)).max()
-    det = m.det_a(poses, joints)
-    within = all(lim.contains(joints[:, i]).all() for i, lim in enumerate(m.limits))
+    with np.errstate(invalid="ignore"):  # NaN where a pose would be unreachable
+        residual = float(np.abs(m.constraints(poses, joints)).max())
+        det = m.det_a(poses, joints)
+        within = all(bool(lim.contains(joints[:, i]).all()) for i, lim in enumerate(m.limits))
     if not (residual <= 1e-9 and (np.sign(det) == sign).all() and within):
+        signs = sorted({"nan" if np.isnan(d) else f"{int(np.sign(d)):+d}" for d in det})
         raise PlanningError(
-            f"internal check failed (residual {residual:.3g}, det A signs "
-            f"{sorted(set(np.sign(det).astype(int).tolist()))}, within limits {within})"
+            f"internal check failed (residual {residual:.3g}, det A signs {signs}, "
+            f"within limits {within})"
         )
 
 

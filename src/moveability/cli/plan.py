@@ -23,10 +23,13 @@ def format_plan(data: Mapping[str, Any]) -> str:
     --------
     >>> print(format_plan({"feasible": True, "region": 0, "path": [
     ...     {"pose": [1.0, 3.0], "joints": [1.5, 2.0], "posture": "+-"},
-    ...     {"pose": [1.1, 3.0], "joints": [1.49, 1.98], "posture": "++"}]}))
+    ...     {"pose": [1.1, 3.0], "joints": [1.49, 1.98], "posture": "++"}],
+    ...     "length": {"pose": {"before": 0.12, "after": 0.1},
+    ...                "joints": {"before": 0.03, "after": 0.025}}}))
     motion in N-connected region 0: 2 configurations, 1 posture change(s)
     start  pose (1, 3) joints (1.5, 2) posture +-
     end    pose (1.1, 3) joints (1.49, 1.98) posture ++
+    length in pose 0.12 -> 0.1, in the joints 0.03 -> 0.025 (the chain of cells -> smoothed)
     """
     path = data["path"]
     changes = sum(1 for a, b in itertools.pairwise(path) if a["posture"] != b["posture"])
@@ -36,14 +39,20 @@ def format_plan(data: Mapping[str, Any]) -> str:
         joints = ", ".join(f"{v:.6g}" for v in c["joints"])
         return f"pose ({pose}) joints ({joints}) posture {c['posture']}"
 
-    return "\n".join(
-        [
-            f"motion in N-connected region {data['region']}: {len(path)} configurations, "
-            f"{changes} posture change(s)",
-            f"start  {show(path[0])}",
-            f"end    {show(path[-1])}",
-        ]
-    )
+    lines = [
+        f"motion in N-connected region {data['region']}: {len(path)} configurations, "
+        f"{changes} posture change(s)",
+        f"start  {show(path[0])}",
+        f"end    {show(path[-1])}",
+    ]
+    length = data.get("length")
+    if length:
+        pose, joints = length["pose"], length["joints"]
+        lines.append(
+            f"length in pose {pose['before']:.4g} -> {pose['after']:.4g}, in the joints "
+            f"{joints['before']:.4g} -> {joints['after']:.4g} (the chain of cells -> smoothed)"
+        )
+    return "\n".join(lines)
 
 
 @click.command("plan")
@@ -52,15 +61,23 @@ def format_plan(data: Mapping[str, Any]) -> str:
 @options.precision_option
 @options.json_options
 @options.resolve_option
+@click.option(
+    "--smooth/--no-smooth",
+    default=True,
+    show_default=True,
+    help="Shorten and smooth the chain of cells through certified shortcuts.",
+)
 def plan_command(
-    spec: str, points: str, precision: float, json_out: str | None, overwrite: bool
+    spec: str, points: str, precision: float, json_out: str | None, overwrite: bool, smooth: bool
 ) -> None:
     """A continuous motion through the poses of POINTS, in order, inside one
     region (no parallel singularity, no joint limit crossed).
 
-    Consecutive configurations are at most the precision apart in pose and in
-    each joint. Exits with status 3, saying which poses are apart, when no
-    region is known to hold them all.
+    The chain of certified cells is shortened and smoothed where every
+    configuration of a shortcut is certified (valid, det A of the region's
+    sign); --no-smooth keeps the chain. Consecutive configurations are at most
+    the precision apart in pose and in each joint. Exits with status 3, saying
+    which poses are apart, when no region is known to hold them all.
     """
     from ..analysis.planning import plan_motion
     from ..errors import PlanningError
@@ -69,7 +86,7 @@ def plan_command(
     with running.reporting_errors():
         result, poses = running.analyse_poses(spec, points, precision)
         try:
-            data = plan_motion(result, poses)
+            data = plan_motion(result, poses, smooth=smooth)
         except PlanningError as error:
             if json_out is not None:
                 # the answer as feasible gives it, with the reason: JSON that pipes

@@ -122,13 +122,13 @@ def plot_command(
 
     if animate and name != "path":
         raise InputError("invalid --animate: only the path figure is animated")
-    check_file(out, "--out", overwrite, (".gif",) if animate else (".png", ".svg"))
     if phis and name != "slices":
         raise InputError("invalid --phi: only the slices figure takes angles")
     if not all(np.isfinite(phis)):
         raise InputError(f"invalid --phi: expected finite angles, got {list(phis)!r}")
     if pose is not None and name != "postures":
         raise InputError("invalid --pose: only the postures figure takes a pose")
+    check_file(out, "--out", overwrite, (".gif",) if animate else (".png", ".svg"))
     at = _pose(pose)
     with running.reporting_errors():
         require("matplotlib", "plot", "figures")

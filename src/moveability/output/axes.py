@@ -16,11 +16,25 @@ if TYPE_CHECKING:
 
     from ..mechanisms.base import Mechanism
 
-__all__ = ["PALETTE", "UNDECIDED", "draw_cells", "figure_of", "frame_axes", "panels", "pyplot"]
+__all__ = [
+    "FONT",
+    "PALETTE",
+    "UNDECIDED",
+    "draw_cells",
+    "figure_of",
+    "frame_axes",
+    "mix_colors",
+    "opaque_legend",
+    "panels",
+    "pyplot",
+    "style_axes",
+]
 
 #: Okabe-Ito colours
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000")
 UNDECIDED = "#BBBBBB"
+#: font sizes (points) shared by the figures of :mod:`moveability.output.plot`
+FONT = {"suptitle": 11.0, "title": 9.5, "label": 9.0, "tick": 8.0, "legend": 8.0}
 
 
 def pyplot() -> Any:
@@ -39,12 +53,50 @@ def figure_of(ax: Axes) -> Figure:
     return cast("Figure", ax.figure)
 
 
-def panels(n: int, max_cols: int, size: float) -> list[Axes]:
-    """A grid of ``n`` panels (at most ``max_cols`` per row), as a flat list of axes."""
+def panels(n: int, max_cols: int, size: float, aspect: float | None = None) -> list[Axes]:
+    """A grid of ``n`` panels (at most ``max_cols`` per row), as a flat list of axes.
+
+    Panels are ``size`` inches wide and as high by default. Given ``aspect`` (the
+    height over the width of what a panel shows), they are that much high plus
+    room for a title, and the figure uses matplotlib's constrained layout, so
+    that labels of one panel never run over the next.
+    """
     cols = min(n, max_cols)
     rows = int(np.ceil(n / cols))
-    _, grid = pyplot().subplots(rows, cols, figsize=(size * cols, size * rows), squeeze=False)
+    if aspect is None:
+        _, grid = pyplot().subplots(rows, cols, figsize=(size * cols, size * rows), squeeze=False)
+    else:
+        height = size * min(max(aspect, 0.2), 2.0) + 0.9
+        _, grid = pyplot().subplots(
+            rows, cols, figsize=(size * cols, height * rows), squeeze=False, layout="constrained"
+        )
     return list(grid.ravel())
+
+
+def style_axes(ax: Axes) -> None:
+    """The font sizes of :data:`FONT` on an axes' title, labels and ticks."""
+    ax.tick_params(labelsize=FONT["tick"])
+    ax.xaxis.label.set_fontsize(FONT["label"])
+    ax.yaxis.label.set_fontsize(FONT["label"])
+    ax.title.set_fontsize(FONT["title"])
+
+
+def opaque_legend(where: Any, handles: list[Any], **kwargs: Any) -> Any:
+    """A legend on an axes or a figure with an opaque frame: a see-through frame
+    over certified cells would make them look undecided."""
+    kwargs.setdefault("fontsize", FONT["legend"])
+    kwargs.setdefault("title_fontsize", FONT["legend"])
+    legend = where.legend(handles=handles, framealpha=1.0, **kwargs)
+    legend.get_frame().set_edgecolor("#888888")
+    return legend
+
+
+def mix_colors(colors: list[Any]) -> tuple[float, float, float]:
+    """The mean of some colours in RGB: the colour of a place several sets share."""
+    from matplotlib.colors import to_rgb
+
+    rgb = np.mean([to_rgb(c) for c in colors], axis=0)
+    return float(rgb[0]), float(rgb[1]), float(rgb[2])
 
 
 def draw_cells(
