@@ -292,11 +292,17 @@ def test_plan_prints_json_when_no_region_holds_the_poses(saved, poses):
 # ------------------------------------------------------------------ messages
 def test_messages_name_the_cell_size_and_print_no_reprs(saved):
     text = run(["regions", saved]).stdout
-    lo, hi = load_analysis(saved).mechanism.pose_box()
-    # the box halved until at most the precision wide, axis by axis
-    cells = [w / 2.0 ** np.ceil(np.log2(w / float(EPS))) for w in hi - lo]
-    assert all(c <= float(EPS) < 2 * c for c in cells)
+    # the cells of the pass at the precision are leaves of the tree, at most the
+    # precision wide; without the resolution they are the smallest leaves
+    result = load_analysis(saved)
+    cells = result.cell_size
+    widths = result.tree.leaves().hi - result.tree.leaves().lo
+    assert (cells <= float(EPS)).all()
+    assert np.isclose(widths, cells, rtol=1e-12, atol=0).all(axis=1).any()
     assert f"cells {cells[0]:.4g} x {cells[1]:.4g}" in text
+    plain = analyze(load_spec(PAPER), precision=float(EPS), resolve=False)
+    leaves = plain.tree.leaves()
+    assert np.allclose(plain.cell_size, (leaves.hi - leaves.lo).min(axis=0), rtol=1e-12, atol=0)
     summary = load_analysis(saved).summary()
     assert "JointLimit" not in summary and "theta1 in [0, pi]" in summary
     one_line_error(run(["regions", PAPER, "-p", "1e-9"]), "precision", "1e-09")

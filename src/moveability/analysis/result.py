@@ -620,10 +620,13 @@ class Analysis:
 
     @property
     def cell_size(self) -> NDArray[np.float64]:
-        """Per pose axis, the width of the cells at the precision: the box halved
-        until at most the precision (the resolution may split finer)."""
+        """Per pose axis, the width of the smallest cells of the pass at the
+        precision (the resolution may split finer): the tree halves every axis
+        at each level, until the level at which the coarsest axis is at most the
+        precision wide, or the axis' own deepest level."""
         lo, hi = self.tree.lo, self.tree.hi
-        depths = np.array(_depths(lo, hi, self.precisions), dtype=np.float64)
+        levels = max(_depths(lo, hi, self.precisions))
+        depths = np.minimum(levels, np.asarray(self.tree.max_depth)).astype(np.float64)
         return np.asarray((hi - lo) / 2.0**depths, dtype=np.float64)
 
     @property

@@ -44,6 +44,6 @@ def report_command(spec: str, out: str, overwrite: bool, precision: float) -> No
             motion, why = None, str(error)
         running.status(f"drawing the figures of {out}")
         with folder_written_whole(out) as temporary:
-            written = write_report(result, temporary, motion, no_motion=why)
+            written = write_report(result, temporary, motion, no_motion=why, spec_path=spec)
         path = os.path.join(out, os.path.basename(written))
     click.echo(path)
