@@ -245,3 +245,17 @@ def test_report_uses_the_3d_figures(result, tmp_path):
     assert '<figure id="regions">' not in page and '<figure id="workspace">' not in page
     assert page.count('src="data:image/png;base64,') == 2
     assert "volume of W_Nj" in page
+
+
+def test_3d_titles_have_three_digits_and_legends_are_opaque():
+    import re
+
+    odd = analyze(load_spec(SPEC), precision=(2.0 / 3, 2.0 / 3, np.pi / 9), resolve=False)
+    for fig in (plot_slices(odd), plot_regions_3d(odd)):
+        texts = [fig.get_suptitle()] + [ax.get_title() for ax in fig.axes]
+        for text in texts:
+            for number in re.findall(r"\d+\.\d+", text):
+                assert len(number.replace(".", "").lstrip("0")) <= 3, (number, text)
+        legends = fig.legends + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+        assert legends and all(leg.get_frame().get_alpha() == 1.0 for leg in legends)
+    assert "0.667, 0.667, 0.349" in plot_slices(odd).get_suptitle()

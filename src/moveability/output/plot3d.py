@@ -19,7 +19,16 @@ from ..errors import InvalidParameterError
 from ..hypertree.status import BOUNDARY, OUT
 from ..hypertree.topology import boundary_faces
 from ..types import Array
-from .axes import PALETTE, UNDECIDED, draw_cells, figure_of, frame_axes, panels, pyplot
+from .axes import (
+    PALETTE,
+    UNDECIDED,
+    draw_cells,
+    figure_of,
+    frame_axes,
+    opaque_legend,
+    panels,
+    pyplot,
+)
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -180,9 +189,9 @@ def plot_slices(
         Line2D([], [], color="black", lw=0.8, label="outline of W (certain or undecided)"),
     ]
     # below the panels: saved with bbox_inches="tight"
-    fig.legend(handles=handles, loc="upper center", ncol=2, fontsize=8, bbox_to_anchor=(0.5, 0.02))
+    opaque_legend(fig, handles, loc="upper center", ncol=2, fontsize=8, bbox_to_anchor=(0.5, 0.02))
     fig.suptitle(
-        f"Slices of the N-connected regions (precision {result.precision_text}); "
+        f"Slices of the N-connected regions (precision {_digits(result.precisions)}); "
         f"{result.measure_name}s of the whole regions"
     )
     return fig
@@ -268,9 +277,16 @@ def plot_regions_3d(result: Analysis, ax: Axes | None = None, max_faces: int = M
     view.set_ylabel(f"{names[1]} (length units)")
     unit = "rad" if 2 in m.periodic_axes else "length units"
     view.set_zlabel(f"{names[2]} ({unit})")
-    view.legend(handles=handles, loc="upper left", fontsize=7)
-    title = f"Certified part of each region (precision {result.precision_text})"
+    opaque_legend(view, handles, loc="upper left", fontsize=7)
+    title = f"Certified part of each region (precision {_digits(result.precisions)})"
     if shown < total:
         title += f"\nlargest {shown} of {total} faces shown"
     view.set_title(title)
     return fig
+
+
+def _digits(values: Any) -> str:
+    """Numbers for a title: at most 3 significant digits, one when all agree."""
+    values = np.atleast_1d(values)
+    shown = values[:1] if (values == values[0]).all() else values
+    return ", ".join(f"{v:.3g}" for v in shown)
