@@ -17,8 +17,9 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks examples
 	$(VENV)/bin/mypy
 
+# one worker per core; a test file stays on one worker (module fixtures, README order)
 test: lint
-	$(VENV)/bin/pytest
+	$(VENV)/bin/pytest -n auto --dist loadfile
 
 demo: $(STAMP)
 	$(PY) examples/demo.py
