@@ -31,6 +31,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_sweep.py
 	$(PY) benchmarks/bench_counts.py
 	$(PY) benchmarks/bench_speed.py
+	$(PY) benchmarks/bench_constraints.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache .hypothesis

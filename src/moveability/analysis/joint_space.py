@@ -295,7 +295,7 @@ def count_in_joint_space(
     >>> found.at_least, found.at_most
     (2, 2)
     """
-    if not has_dyads(mechanism):
+    if not has_dyads(mechanism) or not mechanism.restrictions.empty:
         return None
     distance = _Distance(mechanism)
     lo, hi, periodic = _joint_box(mechanism)

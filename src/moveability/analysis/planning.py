@@ -417,6 +417,8 @@ def _check(analysis: Analysis, poses: Array, joints: Array, sign: int) -> None:
         residual = float(np.abs(m.constraints(poses, joints)).max())
         det = m.det_a(poses, joints)
         within = all(bool(lim.contains(joints[:, i]).all()) for i, lim in enumerate(m.limits))
+        # passive limits, obstacles, collisions: certified at each configuration
+        within &= bool(m.constraints_hold(poses, joints).all())
     if not (residual <= 1e-9 and (np.sign(det) == sign).all() and within):
         signs = sorted({"nan" if np.isnan(d) else f"{int(np.sign(d)):+d}" for d in det})
         raise PlanningError(

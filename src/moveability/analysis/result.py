@@ -274,7 +274,9 @@ def analyze(
         ) from None
     # two dyads: the count is also proved in the joint space (see moveability.analysis.joint_space)
     joint = None
-    if resolve and not generalized_aspects and has_dyads(mechanism):
+    # the joint-space count knows the paper's hypotheses only
+    paper = mechanism.restrictions.empty
+    if resolve and not generalized_aspects and has_dyads(mechanism) and paper:
         phase(progress, "counting the regions in the joint space")
         joint = count_in_joint_space(mechanism)
     phase(progress, "joining the regions")
@@ -656,6 +658,9 @@ class Analysis:
         cross = not self.generalized_aspects
         done = [dead_or_certified(t, s, cross) for s in (1, -1)]
         nodes = np.argwhere(~done[0] | ~done[1])
+        # the flows know the joint limits only: a node where another constraint
+        # may fail gets none, so it is never attached and blocks its neighbours
+        nodes = nodes[~t.unsure[nodes[:, 0], nodes[:, 1]]]
         n, n_post = t.status.shape
         if saved is not None:
             saved_nodes, bits, exists, faces = saved

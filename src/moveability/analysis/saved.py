@@ -32,7 +32,7 @@ __all__ = ["FORMAT", "FORMAT_VERSION", "is_saved_analysis", "load_analysis", "sa
 #: the ``format`` field of a saved analysis
 FORMAT = "moveability.Analysis"
 #: raised whenever the fields change
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 _FLOWS = ("nodes", "bits", "exists", "faces")
 _WHAT = "a file written by moveability analyze --out (save_analysis)"
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ResolutionError
+from ..errors import InvalidParameterError, ResolutionError
 from ..hypertree.keys import MAX_KEY_BITS
 from ..hypertree.measurement import measure
 from ..hypertree.projection import project
@@ -150,6 +150,11 @@ def analyze_wxq(
     [-1, 1]
     """
     eps = float(check_precision(precision, 1)[0])
+    if not mechanism.restrictions.empty:
+        raise InvalidParameterError(
+            "mechanism", "one without passive limits, obstacles or collisions (use analyze)",
+            mechanism.name,
+        )
     w_lo, w_hi = mechanism.bounds
     q_lo = np.array([lim.lo for lim in mechanism.limits])
     q_hi = np.array([lim.lo + 2 * np.pi if lim.periodic else lim.hi for lim in mechanism.limits])

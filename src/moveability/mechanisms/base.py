@@ -21,6 +21,7 @@ of the pose.
 
 from __future__ import annotations
 
+import copy
 import itertools
 from dataclasses import dataclass
 from typing import Protocol
@@ -30,8 +31,9 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
 from ..intervals import Interval
-from ..limits import JointLimit
+from ..limits import INSIDE, JointLimit
 from ..types import Array
+from .constraints import Constraints, Linkage, constraint_codes
 
 __all__ = [
     "FOLD_INNER",
@@ -170,6 +172,52 @@ class Mechanism:
     bounds: tuple[Array, Array]
     #: orientation angles that turn freely (radians); their bounds span one turn
     periodic_axes: tuple[int, ...] = ()
+    #: passive joint limits, obstacles, link collisions (none: the paper's case; see
+    #: :mod:`moveability.mechanisms.constraints`)
+    restrictions: Constraints = Constraints()
+    #: the links as segments, for the constraints (None: the mechanism takes none)
+    linkage: Linkage | None = None
+
+    def constrained(self, constraints: Constraints) -> Mechanism:
+        """A copy of this mechanism with ``constraints`` (see
+        :mod:`moveability.mechanisms.constraints`)."""
+        if not constraints.empty and self.linkage is None:
+            raise InvalidParameterError("constraints", f"none for a {self.name}", constraints)
+        if self.linkage is not None:
+            unknown = set(constraints.passive) - set(self.linkage.passive)
+            if unknown:
+                raise InvalidParameterError(
+                    "passive_limits", f"one of {', '.join(self.linkage.passive)}", sorted(unknown)
+                )
+        out = copy.copy(self)
+        out.restrictions = constraints
+        return out
+
+    def linkage_points(
+        self, lo: Array, hi: Array, angles: list[Interval]
+    ) -> dict[str, tuple[Interval, Interval]]:
+        """Enclosures of the named points of :attr:`linkage` over boxes of poses with
+        joint-angle enclosures per leg."""
+        raise NotImplementedError
+
+    def constraint_codes(
+        self, lo: Array, hi: Array, angles: list[Interval]
+    ) -> NDArray[np.uint8] | None:
+        """Whether every configuration over each box satisfies the constraints
+        (``INSIDE``), none does (``OUTSIDE``) or it cannot tell; None when the
+        mechanism has none."""
+        if self.restrictions.empty or self.linkage is None:
+            return None
+        points = self.linkage_points(lo, hi, angles)
+        return constraint_codes(self.restrictions, self.linkage, points)
+
+    def constraints_hold(self, points: Array, joints: Array) -> NDArray[np.bool_]:
+        """Whether each configuration (one posture each) certainly satisfies the
+        constraints (evaluated over the degenerate box of the configuration)."""
+        codes = self.constraint_codes(
+            points, points, [Interval(joints[:, i]) for i in range(joints.shape[1])]
+        )
+        return np.ones(points.shape[0], dtype=bool) if codes is None else codes == INSIDE
 
     def pose_box(self) -> tuple[Array, Array]:
         """The box the analysis subdivides: the bounds, with each periodic axis

@@ -16,6 +16,7 @@ from ..intervals import Interval
 from ..limits import JointLimit
 from ..types import Array
 from .base import Mechanism
+from .constraints import Linkage, fixed_point
 from .rr_leg import RRLeg
 
 __all__ = ["FiveBar"]
@@ -97,11 +98,38 @@ class FiveBar(Mechanism):
                 leg.joint: "unlimited" if lim.periodic else [lim.lo, lim.hi]
                 for leg, lim in zip(self.rr_legs, self.limits, strict=True)
             },
+            **self.restrictions.to_spec(),
         }
 
     def __repr__(self) -> str:
         lengths = ", ".join(f"L{i}={v:g}" for i, v in enumerate(self.lengths))
-        return f"FiveBar({lengths}, limits={self.limits})"
+        extra = "" if self.restrictions.empty else f", restrictions={self.restrictions}"
+        return f"FiveBar({lengths}, limits={self.limits}{extra})"
+
+    #: the moving links AC, CP, BD, DP; passive angles at P (from CP to DP), C (from
+    #: AC to CP) and D (from BD to DP)
+    linkage = Linkage(
+        links=(("A", "C"), ("C", "P"), ("B", "D"), ("D", "P")),
+        passive={
+            "P": (("C", "P"), ("D", "P")),
+            "C": (("A", "C"), ("C", "P")),
+            "D": (("B", "D"), ("D", "P")),
+        },
+    )
+
+    def linkage_points(
+        self, lo: Array, hi: Array, angles: list[Interval]
+    ) -> dict[str, tuple[Interval, Interval]]:
+        """A, B (fixed), the elbows C, D over the angle enclosures, and P over the box."""
+        n = lo.shape[0]
+        points = {"A": fixed_point((0.0, 0.0), n), "B": fixed_point((self.lengths[0], 0.0), n)}
+        for name, leg, a in zip(("C", "D"), self.rr_legs, angles, strict=True):
+            points[name] = (
+                iv.cos(a) * leg.proximal + leg.base[0],
+                iv.sin(a) * leg.proximal + leg.base[1],
+            )
+        points["P"] = (Interval(lo[:, 0], hi[:, 0]), Interval(lo[:, 1], hi[:, 1]))
+        return points
 
     def _crossings(self) -> list[Interval]:
         """Enclosures (x, y intervals, as one Interval of shape (2,)) of the points

@@ -23,6 +23,7 @@ from ..errors import MissingExtraError, SpecError
 from ..limits import JointLimit
 from ..spec import NOTHING, MechanismSchema, check_spec, read_toml
 from .base import Mechanism
+from .constraints import Constraints
 
 __all__ = ["MECHANISMS", "Registered", "from_spec", "load_spec", "mechanism_class"]
 
@@ -53,7 +54,12 @@ _THREE = ("1", "2", "3")
 MECHANISMS: dict[str, Registered] = {
     "five-bar": Registered(
         "five_bar:FiveBar",
-        MechanismSchema(parameters=("L0", "L1", "L2", "L3", "L4"), joints=("theta1", "theta2")),
+        MechanismSchema(
+            parameters=("L0", "L1", "L2", "L3", "L4"),
+            joints=("theta1", "theta2"),
+            passive=("P", "C", "D"),
+            shapes=True,
+        ),
     ),
     "3-RPR": Registered(
         "three_rpr:ThreeRPR",
@@ -232,4 +238,6 @@ def from_spec(spec: str | os.PathLike[str] | Mapping[str, Any]) -> Mechanism:
         for value in (checked["limits"][joint] for joint in schema.joints)
     )
     parameters = [checked["parameters"][key] for key in schema.parameters]
-    return cls(*parameters, limits)  # type: ignore[call-arg]
+    built = cls(*parameters, limits)  # type: ignore[call-arg]
+    extra = Constraints.from_spec(checked)
+    return built if extra.empty else built.constrained(extra)

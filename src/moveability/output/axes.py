@@ -123,3 +123,18 @@ def frame_axes(ax: Axes, mechanism: Mechanism, title: str) -> None:
     ax.set_xlabel(f"{names[0]} (length units)")
     ax.set_ylabel(f"{names[1]} (length units)")
     ax.set_title(title)
+    draw_obstacles(ax, mechanism)
+
+
+def draw_obstacles(ax: Axes, mechanism: Mechanism) -> None:
+    """The mechanism's obstacles (``[[obstacles]]``), hatched, over the data."""
+    from matplotlib.patches import Circle
+
+    for obstacle in mechanism.restrictions.obstacles:
+        ax.add_patch(
+            Circle(
+                obstacle.center, obstacle.radius, facecolor="#dddddd", edgecolor="black",
+                hatch="///", linewidth=1.0, zorder=5,
+            )
+        )  # fmt: skip
+        ax.annotate("obstacle", obstacle.center, ha="center", va="center", fontsize=7, zorder=6)

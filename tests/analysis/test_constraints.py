@@ -1,0 +1,258 @@
+"""Passive joint limits, obstacles and link collisions (beyond the paper).
+
+Checked against the counts Caro, Chablat, Goldsztejn, Ishii and Jermann (2014)
+publish for a five-bar, and against an independent grid over the joint space
+(tests/constraint_references.py) on further designs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from constraint_references import constrained, grid_count, pose_configurations
+from moveability import analyze, from_spec, plan_motion
+from moveability.errors import SpecError
+from moveability.intervals import Interval
+from moveability.limits import INSIDE, OUTSIDE
+from moveability.mechanisms.constraints import segment_codes, vector_angle
+
+CARO = {
+    "mechanism": "five-bar",
+    "parameters": {"L0": 9, "L1": 8, "L2": 5, "L3": 5, "L4": 8},
+    "limits": {"theta1": "unlimited", "theta2": "unlimited"},
+}
+MIRRORED = {**CARO, "parameters": {"L0": 9, "L1": 5, "L2": 8, "L3": 8, "L4": 5}}
+PASSIVE = {"passive_limits": {"P": ["-pi/2", "pi/2"]}}
+OBSTACLE = {"obstacles": [{"center": [4.5, 0.0], "radius": 1.0}]}
+COLLISIONS = {"collisions": {"links": True}}
+
+
+def _reference_kwargs(extra):
+    kwargs = {}
+    if "passive_limits" in extra:
+        from moveability.spec import parse_angle
+
+        kwargs["passive"] = {
+            k: (parse_angle(v[0]), parse_angle(v[1])) for k, v in extra["passive_limits"].items()
+        }
+    if "obstacles" in extra:
+        kwargs["obstacles"] = [(o["center"], o["radius"]) for o in extra["obstacles"]]
+    if "collisions" in extra:
+        kwargs["collisions"] = True
+    return kwargs
+
+
+def _lengths(spec):
+    return tuple(float(spec["parameters"][k]) for k in ("L0", "L1", "L2", "L3", "L4"))
+
+
+@pytest.mark.parametrize("base", [CARO, MIRRORED], ids=["caro", "mirrored"])
+@pytest.mark.parametrize(
+    ("extra", "published"),
+    [({}, 10), (PASSIVE, 12), (COLLISIONS, 10)],
+    ids=["plain", "passive-P", "collisions"],
+)
+def test_published_generalized_aspects(base, extra, published):
+    spec = {**base, **extra}
+    result = analyze(from_spec(spec), precision=0.2, generalized_aspects=True)
+    at_least, at_most = result.count
+    # the independent reference: components of the grid that grow with it
+    reference, _ = grid_count(
+        _lengths(spec), (None, None), 400, True, min_cells=100, **_reference_kwargs(extra)
+    )
+    assert reference == published
+    assert at_least == published
+    assert at_most is None or at_most >= published
+
+
+def test_obstacle_aspects_find_the_small_ones():
+    spec = {**CARO, **OBSTACLE}
+    reference, _ = grid_count(
+        _lengths(spec), (None, None), 400, True, min_cells=10, **_reference_kwargs(OBSTACLE)
+    )
+    # 20 large aspects and 8 small ones (their cells grow fourfold with the grid)
+    assert reference == 28
+    result = analyze(from_spec(spec), precision=0.2, generalized_aspects=True)
+    assert 22 <= result.count[0] <= 28
+    assert result.count[1] is None or result.count[1] >= 28
+
+
+GEOMETRIES = [
+    # the paper's five-bar, [0, pi], with a passive limit at C and collisions
+    ({"mechanism": "five-bar", "parameters": {"L0": 7, "L1": 8, "L2": 5, "L3": 8, "L4": 5},
+      "limits": {"theta1": [0, "pi"], "theta2": [0, "pi"]},
+      "passive_limits": {"C": [-2.5, 2.5]}, "collisions": {"links": True}}),
+    # the paper's design turning freely, an obstacle above the base
+    ({"mechanism": "five-bar", "parameters": {"L0": 7, "L1": 8, "L2": 5, "L3": 8, "L4": 5},
+      "limits": {"theta1": "unlimited", "theta2": "unlimited"},
+      "obstacles": [{"center": [3.5, 4.0], "radius": 1.5}]}),
+    # equal links, a passive limit at P and an obstacle below
+    ({"mechanism": "five-bar", "parameters": {"L0": 6, "L1": 5, "L2": 6, "L3": 5, "L4": 6},
+      "limits": {"theta1": ["-pi", "pi"], "theta2": ["-pi", "pi"]},
+      "passive_limits": {"P": [-2.0, 2.0]}, "obstacles": [{"center": [3.0, -3.0], "radius": 1.0}]}),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("spec", GEOMETRIES, ids=["paper-C-collisions", "obstacle", "equal-links"])
+@pytest.mark.parametrize("aspects", [False, True], ids=["regions", "aspects"])
+def test_counts_against_the_joint_space_grid(spec, aspects):
+    mechanism = from_spec(spec)
+    extra = {k: spec[k] for k in ("passive_limits", "obstacles", "collisions") if k in spec}
+    limits = tuple(None if lim.periodic else (lim.lo, lim.hi) for lim in mechanism.limits)
+    small, _ = grid_count(
+        _lengths(spec), limits, 300, aspects, min_cells=30, **_reference_kwargs(extra)
+    )
+    every, _ = grid_count(
+        _lengths(spec), limits, 300, aspects, min_cells=1, **_reference_kwargs(extra)
+    )
+    result = analyze(mechanism, precision=0.15, generalized_aspects=aspects)
+    at_least, at_most = result.count
+    # certified bounds hold the true count; the grid's large components are
+    # true ones, and every true one shows on the grid unless smaller than a cell
+    assert at_least <= every
+    assert at_most is None or at_most >= small
+    assert at_least >= 1
+    if spec is GEOMETRIES[0]:
+        # coarse enough to separate every component: the lower bound is the count
+        assert at_least == small == (5 if aspects else 2)
+
+
+@pytest.mark.parametrize("spec", [{**CARO, **PASSIVE, **OBSTACLE, **COLLISIONS}, *GEOMETRIES])
+def test_locate_agrees_with_pointwise_constraints(spec):
+    mechanism = from_spec(spec)
+    extra = _reference_kwargs(
+        {k: spec[k] for k in ("passive_limits", "obstacles", "collisions") if k in spec}
+    )
+    result = analyze(mechanism, precision=0.15)
+    lo, hi = mechanism.pose_box()
+    rng = np.random.default_rng(7)
+    poses = rng.uniform(lo, hi, size=(400, 2))
+    answers = result.locate(poses)["points"]
+    checked = 0
+    for pose, answer in zip(poses, answers, strict=True):
+        if answer["workspace"] is None:
+            continue
+        # stable under small moves: the pointwise answer is the same around the pose
+        verdicts = set()
+        for dx, dy in ((0, 0), (1e-3, 0), (-1e-3, 0), (0, 1e-3), (0, -1e-3)):
+            p = pose + np.array([dx, dy])
+            found = False
+            for t1, t2, mode in pose_configurations(_lengths(spec), p):
+                within = all(
+                    lim.contains(np.array([t]))[0]
+                    for lim, t in zip(mechanism.limits, (t1, t2), strict=True)
+                )
+                if within and constrained(mode, **extra)[0]:
+                    found = True
+            verdicts.add(found)
+        if len(verdicts) == 1:
+            assert answer["workspace"] is verdicts.pop(), pose
+            checked += 1
+    assert checked > 200
+
+
+def test_planned_motions_satisfy_every_constraint():
+    spec = {**CARO, **PASSIVE, **OBSTACLE, **COLLISIONS}
+    mechanism = from_spec(spec)
+    result = analyze(mechanism, precision=0.1)
+    region = max(result.regions, key=lambda r: r.area[0])
+    sure = np.flatnonzero(result.region_cells(region.id)[0])
+    leaves = result.tree.leaves()
+    centres = 0.5 * (leaves.lo[sure] + leaves.hi[sure])
+    points = centres[[np.argmin(centres[:, 0]), np.argmax(centres[:, 0])]]
+    motion = plan_motion(result, points)
+    extra = _reference_kwargs(spec)
+    L0, L1, _, L3, _ = _lengths(spec)
+    for conf in motion["path"]:
+        t1, t2 = conf["joints"]
+        mode = {
+            "A": np.zeros(2), "B": np.array([L0, 0.0]),
+            "C": np.array([[L1 * np.cos(t1), L1 * np.sin(t1)]]),
+            "D": np.array([[L0 + L3 * np.cos(t2), L3 * np.sin(t2)]]),
+            "P": np.array([conf["pose"]]), "valid": np.array([True]),
+        }  # fmt: skip
+        assert constrained(mode, **extra)[0], conf
+
+
+@pytest.mark.parametrize(
+    ("table", "key"),
+    [
+        ({"obstacles": [{"center": [0, 0], "radius": 1}, {"center": [1, 1], "radius": -1}]},
+         "obstacles[1].radius"),
+        ({"obstacles": [{"center": [0], "radius": 1}]}, "obstacles[0].center"),
+        ({"obstacles": {"center": [0, 0], "radius": 1}}, "obstacles"),
+        ({"passive_limits": {"P": ["pi/2", "-pi/2"]}}, "passive_limits.P"),
+        ({"passive_limits": {"Q": [0, 1]}}, "passive_limits.Q"),
+        ({"collisions": {"links": "yes"}}, "collisions.links"),
+        ({"collisions": {"bodies": True}}, "collisions.bodies"),
+    ],
+)  # fmt: skip
+def test_errors_name_the_key(table, key):
+    with pytest.raises(SpecError, match=rf"invalid {key.replace('[', '.').replace(']', '.')}"):
+        from_spec({**CARO, **table})
+
+
+def test_tables_are_refused_where_they_do_not_apply():
+    spec = {
+        "mechanism": "biglide",
+        "parameters": {"L1": 5, "L2": 4},
+        "limits": {"rho1": [-6, 6], "rho2": [-6, 6]},
+        "obstacles": [{"center": [0, 0], "radius": 1}],
+    }
+    with pytest.raises(SpecError, match="obstacles"):
+        from_spec(spec)
+
+
+def test_spec_round_trip_keeps_the_constraints():
+    spec = {**CARO, **PASSIVE, **OBSTACLE, **COLLISIONS}
+    mechanism = from_spec(spec)
+    again = from_spec(mechanism.to_spec())
+    assert again.restrictions == mechanism.restrictions
+    assert not again.restrictions.empty
+
+
+def test_interval_geometry_is_sound_on_random_boxes():
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        centre = rng.uniform(-3, 3, size=(4, 2))
+        half = rng.uniform(0, 0.3, size=(4, 2))
+        boxes = [(Interval(np.array([c[0] - h[0]]), np.array([c[0] + h[0]])),
+                  Interval(np.array([c[1] - h[1]]), np.array([c[1] + h[1]])))
+                 for c, h in zip(centre, half, strict=True)]  # fmt: skip
+        code = int(segment_codes(*boxes)[0])
+        angle = vector_angle(boxes[0][0], boxes[0][1])
+        for _ in range(20):
+            pts = centre + rng.uniform(-1, 1, size=(4, 2)) * half
+            a, b, c, d = pts
+
+            def cross(u, v):
+                return u[0] * v[1] - u[1] * v[0]
+
+            o1, o2 = cross(b - a, c - a), cross(b - a, d - a)
+            o3, o4 = cross(d - c, a - c), cross(d - c, b - c)
+            crossing = o1 * o2 < 0 and o3 * o4 < 0
+            if code == INSIDE:
+                assert not crossing
+            if code == OUTSIDE:
+                assert crossing
+            t = np.arctan2(a[1], a[0])
+            assert any(angle.lo[0] <= t + k * 2 * np.pi <= angle.hi[0] for k in (-1, 0, 1))
+
+
+def test_figures_draw_the_obstacles():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.patches import Circle
+
+    from moveability.output.plot import figure
+
+    result = analyze(from_spec({**CARO, **OBSTACLE}), precision=0.3)
+    fig = figure("regions", result)
+    panels = [ax for ax in fig.axes if ax.get_xlabel().startswith("x")]
+    assert len(panels) >= 3
+    for ax in panels:
+        circles = [p for p in ax.patches if isinstance(p, Circle) and p.get_hatch()]
+        assert len(circles) == 1, ax.get_title()
+        assert np.allclose(circles[0].center, (4.5, 0.0)) and circles[0].radius == 1.0
