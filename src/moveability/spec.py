@@ -297,69 +297,73 @@ def _beyond_the_paper(
     """The optional tables ``[passive_limits]``, ``[[obstacles]]`` and
     ``[collisions]``, checked and normalised (absent ones are left out)."""
     out: dict[str, Any] = {}
-    if "passive_limits" in data:
-        table = data["passive_limits"]
-        if not schema.passive:
-            raise SpecError("passive_limits", f"no such table for a {name}", Plain("a table"))
-        if not isinstance(table, Mapping):
-            raise SpecError("passive_limits", "a table of [lo, hi] per passive joint", table)
-        limits = {}
-        for joint, limit in table.items():
-            key = f"passive_limits.{joint}"
-            if joint not in schema.passive:
-                raise SpecError(key, f"one of {', '.join(schema.passive)}", Plain(str(joint)))
-            if isinstance(limit, str) or not isinstance(limit, Sequence) or len(limit) != 2:
-                raise SpecError(key, "[lo, hi] in radians with lo < hi", limit)
-            lo, hi = parse_angle(limit[0], f"{key}[0]"), parse_angle(limit[1], f"{key}[1]")
-            if not lo < hi:
-                raise SpecError(key, "[lo, hi] with lo < hi (an empty or reversed range)", limit)
-            if hi - lo > _TWO_PI_MAX:
-                raise SpecError(key, "a range no wider than 2*pi", limit)
-            limits[str(joint)] = (lo, hi)
-        out["passive_limits"] = {j: limits[j] for j in schema.passive if j in limits}
-    if "obstacles" in data:
-        items = data["obstacles"]
-        if not schema.shapes:
-            raise SpecError("obstacles", f"no such table for a {name}", Plain("a table"))
-        if isinstance(items, Mapping) or isinstance(items, str) or not isinstance(items, Sequence):
-            raise SpecError("obstacles", "an array of tables [[obstacles]]", items)
-        obstacles = []
-        for i, item in enumerate(items):
-            key = f"obstacles[{i}]"
-            if not isinstance(item, Mapping):
-                raise SpecError(key, "a table with center and radius", item)
-            for extra in item:
-                if extra not in ("center", "radius"):
-                    raise SpecError(f"{key}.{extra}", "center or radius", Plain(str(extra)))
-            center = item.get("center", NOTHING)
-            if (
-                isinstance(center, str)
-                or not isinstance(center, Sequence)
-                or len(center) != 2
-                or not all(_is_number(v) and math.isfinite(float(v)) for v in center)
-            ):
-                raise SpecError(f"{key}.center", "[x, y], two finite numbers", center)
-            radius = item.get("radius", NOTHING)
-            if not (_is_number(radius) and math.isfinite(float(radius)) and float(radius) > 0):
-                raise SpecError(f"{key}.radius", "a positive finite length", radius)
-            obstacles.append(
-                {"center": [float(center[0]), float(center[1])], "radius": float(radius)}
-            )
-        out["obstacles"] = obstacles
-    if "collisions" in data:
-        table = data["collisions"]
-        if not schema.shapes:
-            raise SpecError("collisions", f"no such table for a {name}", Plain("a table"))
-        if not isinstance(table, Mapping):
-            raise SpecError("collisions", "a table such as { links = true }", table)
-        for extra in table:
-            if extra != "links":
-                raise SpecError(f"collisions.{extra}", "links", Plain(str(extra)))
-        links = table.get("links", False)
-        if not isinstance(links, bool):
-            raise SpecError("collisions.links", "true or false", links)
-        out["collisions"] = {"links": links}
+    for key, check, allowed in (
+        ("passive_limits", _passive_limits, bool(schema.passive)),
+        ("obstacles", _obstacles, schema.shapes),
+        ("collisions", _collisions, schema.shapes),
+    ):
+        if key in data:
+            if not allowed:
+                raise SpecError(key, f"no such table for a {name}", Plain("a table"))
+            out[key] = check(data[key], schema)
     return out
+
+
+def _passive_limits(table: object, schema: MechanismSchema) -> dict[str, tuple[float, float]]:
+    if not isinstance(table, Mapping):
+        raise SpecError("passive_limits", "a table of [lo, hi] per passive joint", table)
+    limits = {}
+    for joint, limit in table.items():
+        key = f"passive_limits.{joint}"
+        if joint not in schema.passive:
+            raise SpecError(key, f"one of {', '.join(schema.passive)}", Plain(str(joint)))
+        if isinstance(limit, str) or not isinstance(limit, Sequence) or len(limit) != 2:
+            raise SpecError(key, "[lo, hi] in radians with lo < hi", limit)
+        lo, hi = parse_angle(limit[0], f"{key}[0]"), parse_angle(limit[1], f"{key}[1]")
+        if not lo < hi:
+            raise SpecError(key, "[lo, hi] with lo < hi (an empty or reversed range)", limit)
+        if hi - lo > _TWO_PI_MAX:
+            raise SpecError(key, "a range no wider than 2*pi", limit)
+        limits[str(joint)] = (lo, hi)
+    return {j: limits[j] for j in schema.passive if j in limits}
+
+
+def _obstacles(items: object, schema: MechanismSchema) -> list[dict[str, Any]]:
+    if isinstance(items, Mapping | str) or not isinstance(items, Sequence):
+        raise SpecError("obstacles", "an array of tables [[obstacles]]", items)
+    obstacles = []
+    for i, item in enumerate(items):
+        key = f"obstacles[{i}]"
+        if not isinstance(item, Mapping):
+            raise SpecError(key, "a table with center and radius", item)
+        for extra in item:
+            if extra not in ("center", "radius"):
+                raise SpecError(f"{key}.{extra}", "center or radius", Plain(str(extra)))
+        center = item.get("center", NOTHING)
+        if (
+            isinstance(center, str)
+            or not isinstance(center, Sequence)
+            or len(center) != 2
+            or not all(_is_number(v) and math.isfinite(float(v)) for v in center)
+        ):
+            raise SpecError(f"{key}.center", "[x, y], two finite numbers", center)
+        radius = item.get("radius", NOTHING)
+        if not (_is_number(radius) and math.isfinite(float(radius)) and float(radius) > 0):
+            raise SpecError(f"{key}.radius", "a positive finite length", radius)
+        obstacles.append({"center": [float(center[0]), float(center[1])], "radius": float(radius)})
+    return obstacles
+
+
+def _collisions(table: object, schema: MechanismSchema) -> dict[str, bool]:
+    if not isinstance(table, Mapping):
+        raise SpecError("collisions", "a table such as { links = true }", table)
+    for extra in table:
+        if extra != "links":
+            raise SpecError(f"collisions.{extra}", "links", Plain(str(extra)))
+    links = table.get("links", False)
+    if not isinstance(links, bool):
+        raise SpecError("collisions.links", "true or false", links)
+    return {"links": links}
 
 
 def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
