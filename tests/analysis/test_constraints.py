@@ -256,3 +256,14 @@ def test_figures_draw_the_obstacles():
         circles = [p for p in ax.patches if isinstance(p, Circle) and p.get_hatch()]
         assert len(circles) == 1, ax.get_title()
         assert np.allclose(circles[0].center, (4.5, 0.0)) and circles[0].radius == 1.0
+
+
+def test_report_shows_the_constraints_as_toml_that_reads_back():
+    import tomllib
+
+    from moveability.output.report import spec_toml
+
+    mechanism = from_spec({**CARO, **PASSIVE, **OBSTACLE, **COLLISIONS})
+    text = spec_toml(mechanism)
+    assert 'P = ["-pi/2", "pi/2"]' in text and "[[obstacles]]" in text
+    assert from_spec(tomllib.loads(text)).restrictions == mechanism.restrictions

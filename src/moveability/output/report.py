@@ -127,8 +127,8 @@ def _angle(value: Any) -> Any:
 
 
 def _with_angles(spec: Mapping[str, Any], mechanism: Mechanism) -> dict[str, Any]:
-    """The spec with revolute joint limits (and the bounds of periodic pose angles)
-    written as multiples of pi where they are."""
+    """The spec with revolute joint limits, passive joint limits and the bounds of
+    periodic pose angles written as multiples of pi where they are."""
     out = dict(spec)
     limits = spec.get("limits")
     if isinstance(limits, Mapping):
@@ -143,6 +143,10 @@ def _with_angles(spec: Mapping[str, Any], mechanism: Mechanism) -> dict[str, Any
             else lim
             for joint, lim in limits.items()
         }
+    passive = spec.get("passive_limits")
+    if isinstance(passive, Mapping):
+        # passive joints are revolute
+        out["passive_limits"] = {joint: [_angle(v) for v in lim] for joint, lim in passive.items()}
     bounds = spec.get("bounds")
     periodic = set(spec.get("periodic") or ())
     if isinstance(bounds, Mapping) and periodic:
