@@ -27,7 +27,7 @@ from .joint_space import JointSpaceCount
 from .result import Analysis, Evidence
 from .sheets import SheetTable
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "is_saved_analysis", "load_analysis", "save_analysis"]
+__all__ = ["FORMAT", "FORMAT_VERSION", "load_analysis", "save_analysis"]
 
 #: the ``format`` field of a saved analysis
 FORMAT = "moveability.Analysis"
@@ -99,12 +99,6 @@ def save_analysis(result: Analysis, path: str | os.PathLike[str]) -> None:
     finally:
         if os.path.exists(temporary):
             os.unlink(temporary)
-
-
-def is_saved_analysis(path: str | os.PathLike[str]) -> bool:
-    """Whether ``path`` names a saved analysis rather than a spec (by its
-    ``.npz`` extension; the content is checked when it is loaded)."""
-    return os.fspath(path).lower().endswith(".npz")
 
 
 def load_analysis(path: str | os.PathLike[str]) -> Analysis:

@@ -225,10 +225,7 @@ def analyse_poses(
         return result, read_points(points, result.mechanism.pose_names)
     mechanism = load_mechanism(source)
     poses = read_points(points, mechanism.pose_names)
-    result = run_analysis(
-        mechanism, precision, progress_reporter(), **analysis_options(generalized_aspects)
-    )
-    return result, poses
+    return open_analysis(source, precision, generalized_aspects, mechanism), poses
 
 
 def is_saved(source: str) -> bool:

@@ -26,7 +26,9 @@ __all__ = [
     "mix_colors",
     "opaque_legend",
     "panels",
+    "precision_text",
     "pyplot",
+    "significant",
     "style_axes",
 ]
 
@@ -138,3 +140,41 @@ def draw_obstacles(ax: Axes, mechanism: Mechanism) -> None:
             )
         )  # fmt: skip
         ax.annotate("obstacle", obstacle.center, ha="center", va="center", fontsize=7, zorder=6)
+
+
+def significant(value: float, digits: int = 3, direction: int = 0) -> str:
+    """``value`` with at most ``digits`` significant digits, in fixed notation.
+
+    ``direction`` -1 rounds down, +1 up (the ends of an enclosure, rounded outwards).
+
+    Examples
+    --------
+    >>> [significant(v) for v in (0.0349066, 156.748, 2.90506, -3.0, 1234.5)]
+    ['0.0349', '157', '2.91', '-3', '1230']
+    >>> significant(42.531, direction=-1), significant(43.250, direction=1)
+    ('42.5', '43.3')
+    """
+    v = float(value)
+    if not np.isfinite(v):
+        return str(v)
+    if v == 0.0:
+        return "0"
+    decimals = digits - 1 - int(np.floor(np.log10(abs(v))))
+    scale = 10.0**decimals
+    if direction < 0:
+        r = np.floor(v * scale) / scale
+    elif direction > 0:
+        r = np.ceil(v * scale) / scale
+    else:
+        r = np.round(v * scale) / scale
+    if r == 0.0:
+        return "0"
+    text = f"{r:.{max(decimals, 0)}f}"
+    return text.rstrip("0").rstrip(".") if "." in text else text
+
+
+def precision_text(result: Any) -> str:
+    """An analysis' precision for a title, as it was given (one value, or one per
+    axis), three significant digits each."""
+    values = np.atleast_1d(result.precision)
+    return ", ".join(significant(v) for v in values)

@@ -32,7 +32,9 @@ from .axes import (
     mix_colors,
     opaque_legend,
     panels,
+    precision_text,
     pyplot,
+    significant,
     style_axes,
 )
 
@@ -80,44 +82,9 @@ def _axes(ax: Axes | None, figsize: tuple[float, float]) -> tuple[Figure, Axes]:
     return fig, new
 
 
-def _sig(value: float, digits: int = 3, direction: int = 0) -> str:
-    """``value`` with at most ``digits`` significant digits, in fixed notation.
-
-    ``direction`` -1 rounds down, +1 up (the ends of an enclosure, rounded outwards).
-
-    Examples
-    --------
-    >>> _sig(0.0349066), _sig(156.748), _sig(2.90506), _sig(-3.0), _sig(1234.5)
-    ('0.0349', '157', '2.91', '-3', '1230')
-    >>> _sig(42.531, direction=-1), _sig(43.250, direction=1)
-    ('42.5', '43.3')
-    """
-    v = float(value)
-    if not np.isfinite(v):
-        return str(v)
-    if v == 0.0:
-        return "0"
-    decimals = digits - 1 - int(np.floor(np.log10(abs(v))))
-    scale = 10.0**decimals
-    if direction < 0:
-        r = np.floor(v * scale) / scale
-    elif direction > 0:
-        r = np.ceil(v * scale) / scale
-    else:
-        r = np.round(v * scale) / scale
-    if r == 0.0:
-        return "0"
-    text = f"{r:.{max(decimals, 0)}f}"
-    return text.rstrip("0").rstrip(".") if "." in text else text
-
-
 def _enclosure_text(bounds: tuple[float, float]) -> str:
     """``[lo, hi]`` rounded outwards to three significant digits."""
-    return f"[{_sig(bounds[0], direction=-1)}, {_sig(bounds[1], direction=1)}]"
-
-
-def _precision_text(result: Analysis) -> str:
-    return ", ".join(_sig(v) for v in np.atleast_1d(result.precision))
+    return f"[{significant(bounds[0], direction=-1)}, {significant(bounds[1], direction=1)}]"
 
 
 def _unit(mechanism: Mechanism, joint: int) -> str:
@@ -128,12 +95,11 @@ def _unit(mechanism: Mechanism, joint: int) -> str:
 def _joint_text(mechanism: Mechanism, joints: Array) -> str:
     """Joint values with their units, three significant digits each."""
     units = {_unit(mechanism, i) for i in range(len(joints))}
-    values = ", ".join(_sig(v) for v in joints)
+    values = ", ".join(significant(v) for v in joints)
     if len(units) == 1:
         return f"q = ({values}) {units.pop()}"
-    return (
-        "q = (" + ", ".join(f"{_sig(v)} {_unit(mechanism, i)}" for i, v in enumerate(joints)) + ")"
-    )
+    shown = (f"{significant(v)} {_unit(mechanism, i)}" for i, v in enumerate(joints))
+    return "q = (" + ", ".join(shown) + ")"
 
 
 def _light(color: Any, weight: float = 0.35) -> tuple[float, float, float]:
@@ -240,7 +206,7 @@ def plot_workspace(result: Analysis, ax: Axes | None = None) -> Figure:
         Patch(color=UNDECIDED, label="W undecided at this precision"),
         *handles,
     ]
-    title = f"Workspace W and singularity loci (precision {_precision_text(result)})"
+    title = f"Workspace W and singularity loci (precision {precision_text(result)})"
     _pose_axes(ax, m, title, (lo, hi))
     if wide:
         opaque_legend(ax, handles, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
@@ -397,7 +363,7 @@ def plot_postures(
         state = [] if within else ["beyond a joint limit"]
         if singular:
             state.append("singular")
-        title = f"posture {name}: {_joint_text(mechanism, q[k])}\ndet A = {_sig(det)}"
+        title = f"posture {name}: {_joint_text(mechanism, q[k])}\ndet A = {significant(det)}"
         if state:
             title += " [" + ", ".join(state) + "]"
         _pose_axes(ax, mechanism, title, box)
@@ -405,7 +371,7 @@ def plot_postures(
     for ax in axes[n:]:
         ax.set_axis_off()
     fig.suptitle(
-        f"Postures at pose ({', '.join(_sig(v) for v in p[0])})", fontsize=FONT["suptitle"]
+        f"Postures at pose ({', '.join(significant(v) for v in p[0])})", fontsize=FONT["suptitle"]
     )
     return fig
 
@@ -475,7 +441,7 @@ def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure
     handles += mixtures
     opaque_legend(fig, handles, loc="outside lower center", ncol=min(4, max(2, len(handles) // 2)))
     fig.suptitle(
-        f"N-connected regions (precision {_precision_text(result)})", fontsize=FONT["suptitle"]
+        f"N-connected regions (precision {precision_text(result)})", fontsize=FONT["suptitle"]
     )
     return fig
 
@@ -814,7 +780,7 @@ def plot_joint_space(result: Analysis, ax: Axes | None = None, resolution: int =
     ax.set_ylabel(f"{m.joint_names[1]} ({_unit(m, 1)})")
     how = "" if _dyads(m) else " (configurations sampled on a grid of poses)"
     ax.set_title(
-        f"Joint space Q: traces of the regions{how}\n(precision {_precision_text(result)}, "
+        f"Joint space Q: traces of the regions{how}\n(precision {precision_text(result)}, "
         f"{n} x {n} joint vectors)"
     )
     style_axes(ax)

@@ -27,6 +27,7 @@ from .axes import (
     frame_axes,
     opaque_legend,
     panels,
+    precision_text,
     pyplot,
 )
 
@@ -191,7 +192,7 @@ def plot_slices(
     # below the panels: saved with bbox_inches="tight"
     opaque_legend(fig, handles, loc="upper center", ncol=2, fontsize=8, bbox_to_anchor=(0.5, 0.02))
     fig.suptitle(
-        f"Slices of the N-connected regions (precision {_digits(result.precisions)}); "
+        f"Slices of the N-connected regions (precision {precision_text(result)}); "
         f"{result.measure_name}s of the whole regions"
     )
     return fig
@@ -278,15 +279,8 @@ def plot_regions_3d(result: Analysis, ax: Axes | None = None, max_faces: int = M
     unit = "rad" if 2 in m.periodic_axes else "length units"
     view.set_zlabel(f"{names[2]} ({unit})")
     opaque_legend(view, handles, loc="upper left", fontsize=7)
-    title = f"Certified part of each region (precision {_digits(result.precisions)})"
+    title = f"Certified part of each region (precision {precision_text(result)})"
     if shown < total:
         title += f"\nlargest {shown} of {total} faces shown"
     view.set_title(title)
     return fig
-
-
-def _digits(values: Any) -> str:
-    """Numbers for a title: at most 3 significant digits, one when all agree."""
-    values = np.atleast_1d(values)
-    shown = values[:1] if (values == values[0]).all() else values
-    return ", ".join(f"{v:.3g}" for v in shown)
