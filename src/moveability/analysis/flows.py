@@ -15,9 +15,12 @@ configuration of the node invalid:
 * each joint whose enclosure may hold a lower stop never decreases, each one
   that may hold an upper stop never increases (both: no flow);
 * a leg that may fold (a serial singularity in the leaf) stays reachable in
-  that direction (the leg's ``reach_flows``), its joint is certainly within
+  that direction (the leg's ``fold_flow``), its joint is certainly within
   its limits and det A is certainly of the sign; the configurations of its
-  branch vary continuously up to the fold.
+  branch vary continuously up to the fold. The leg's distance to its reach
+  limit then never decreases, so a configuration off the fold (det B != 0, as
+  every one of a generalized aspect) stays off it: the same flow serves
+  generalized aspects, where no posture may change.
 
 From any valid configuration of such a node, the ray along the direction then
 stays valid until it leaves the leaf through the face on that side, where the
@@ -261,7 +264,6 @@ def flow_conditions(
     hi: Array,
     table: SheetTable,
     nodes: NDArray[np.intp],
-    cross_serial: bool = True,
 ) -> tuple[NDArray[np.uint64], NDArray[np.bool_], NDArray[np.uint8]]:
     """Where the pieces of some nodes flow.
 
@@ -302,7 +304,7 @@ def flow_conditions(
         at = np.flatnonzero(nodes[:, 1] == p)
         if not at.size:
             continue
-        flows, ex, fc = _posture_flows(mechanism, lo, hi, table, nodes[at, 0], p, cross_serial)
+        flows, ex, fc = _posture_flows(mechanism, lo, hi, table, nodes[at, 0], p)
         weights = np.left_shift(np.uint64(1), np.arange(flows.shape[-1], dtype=np.uint64))
         bits[:, at] = (flows.astype(np.uint64) * weights).sum(axis=-1, dtype=np.uint64)
         exists[at] = ex
@@ -317,7 +319,6 @@ def _posture_flows(
     table: SheetTable,
     rows: NDArray[np.intp],
     p: int,
-    cross_serial: bool,
 ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.uint8]]:
     """The flows of the nodes of posture ``p`` over leaves ``rows``:
     ``(flows (2, n, slots, F), exists (n, slots), faces (F, n))``."""
@@ -362,6 +363,8 @@ def _posture_flows(
     for c in range(slots):
         exists[:, c] = np.logical_and.reduce([pieces[i][0][combos[c][i]] for i in range(n_legs)])
     fold_cache: list[dict[str, Any]] = [{} for _ in range(n_legs)]
+    with quiet():
+        margins = mechanism.constraint_margins(blo, bhi, angles, p, regular)
     for ff, field in enumerate(fields):
         with quiet():
             ok = usable.copy() if field.usable is None else usable & field.usable
@@ -373,13 +376,13 @@ def _posture_flows(
                     rates.append(Interval(np.full(rows.size, speed)))
                     rising.append(np.full(rows.size, speed >= 0))
                     falling.append(np.full(rows.size, speed <= 0))
-                    if cross_serial:
-                        keeps = leg.turn_keeps(blo, bhi, int(branches[i]), field.turn)  # type: ignore[attr-defined]
-                        ok &= regular[:, i] | keeps
+                    # it keeps its distance to the fold (cross_serial or not)
+                    keeps = leg.turn_keeps(blo, bhi, int(branches[i]), field.turn)  # type: ignore[attr-defined]
+                    ok &= regular[:, i] | keeps
                     continue
                 rate = _dot(gradients[i], field.velocity)
                 if folding[:, i].any():
-                    if cross_serial and hasattr(leg, "fold_flow"):
+                    if hasattr(leg, "fold_flow"):
                         keeps, fold_rate = leg.fold_flow(
                             blo, bhi, leg_status[:, i], int(branches[i]), field.velocity,
                             cache=fold_cache[i],
@@ -394,16 +397,14 @@ def _posture_flows(
                         np.where(regular[:, i], rate.hi, fold_rate.hi),
                     )
                 up, down = rate.lo >= 0, rate.hi <= 0
-                if not cross_serial:
-                    ok &= regular[:, i]
                 rates.append(rate)
                 rising.append(up)
                 falling.append(down)
             det_rate = mechanism.det_a_rate(
                 blo, bhi, angles, field.velocity, rates, rows_and_partials=known
             )
-        if field.leg >= 0 and not cross_serial:
-            ok &= regular[:, field.leg]
+            # passive limits, obstacles, collisions that may be active stay kept
+            kept = _kept(mechanism, margins, blo, bhi, angles, field.velocity, rates)
         for c in range(slots):
             slot_ok = ok.copy()
             for i in range(n_legs):
@@ -414,7 +415,7 @@ def _posture_flows(
                 steady = sign == s
                 if det_rate is not None:
                     steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
-                flows[row, :, c, ff] = slot_ok & steady
+                flows[row, :, c, ff] = slot_ok & steady & kept[row]
     # the constraints that may be active near the leaf (within _NEAR of its size):
     # the leaves around one corner then share the direction into it
     det = Interval(table.det_lo[rows, p], table.det_hi[rows, p])
@@ -423,9 +424,29 @@ def _posture_flows(
         near = [mechanism.limits[i].pieces(_widened(angles[i])) for i in range(n_legs)]
     _adapted_flows(
         mechanism, blo, bhi, p, angles, gradients, (pieces, near), combos,
-        usable & regular.all(axis=1), (sign, near_singular), flows, faces, n_fixed, known,
+        usable & regular.all(axis=1), (sign, near_singular), flows, faces, n_fixed,
+        (known, margins),
     )
     return flows, exists, faces
+
+
+def _kept(
+    mechanism: Mechanism,
+    margins: Any,
+    lo: Array,
+    hi: Array,
+    angles: list[Interval],
+    velocity: list[Interval],
+    rates: list[Interval],
+) -> tuple[Any, Any]:
+    """Per sign of det A (+, -): where a motion at ``velocity`` (joints at
+    ``rates``) certainly keeps the constraints beyond the paper that may be
+    active (True where the mechanism has none)."""
+    if margins is None:
+        return True, True
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        moving = mechanism.linkage_velocities(lo, hi, angles, velocity, rates)
+        return margins.kept(moving, 1), margins.kept(moving, -1)
 
 
 def _widened(x: Interval) -> Interval:
@@ -449,7 +470,7 @@ def _adapted_flows(
     flows: NDArray[np.bool_],
     faces: NDArray[np.uint8],
     first: int,
-    known: Any,
+    known_margins: tuple[Any, Any],
 ) -> None:
     """The flows along each leaf's own direction (see :func:`flow_conditions`),
     written into ``flows`` and ``faces`` from index ``first``, one per slot and sign.
@@ -459,6 +480,7 @@ def _adapted_flows(
     comes from the constraints near the leaf, the conditions from those in it."""
     pieces, near = both_pieces
     sign, near_singular = signs
+    known, margins = known_margins
     n, k = lo.shape
     n_legs = len(mechanism.legs)
     if not usable.any():
@@ -482,6 +504,7 @@ def _adapted_flows(
             det_at.append(rate.mid)
         det_normal = np.stack(det_at, axis=1)
         joint_normal = [np.stack([g.mid for g in joint_at[i]], axis=1) for i in range(n_legs)]
+        beyond = _constraint_normals(mechanism, margins, lo, hi, angles, gradients)
 
     def unit(v: Array) -> Array:
         norm = np.linalg.norm(v, axis=1, keepdims=True)
@@ -498,6 +521,11 @@ def _adapted_flows(
                 normals.append(
                     np.where(lower[j][:, None], unit(joint_normal[i]), 0.0)
                     - np.where(upper[j][:, None], unit(joint_normal[i]), 0.0)
+                )
+            for rise, fall, normal in beyond:
+                normals.append(
+                    np.where(rise[:, None], unit(normal), 0.0)
+                    - np.where(fall[:, None], unit(normal), 0.0)
                 )
             direction = unit(into_corner(np.stack(normals, axis=1)))
             moving = usable & (np.abs(direction).sum(axis=1) > 0)
@@ -517,10 +545,40 @@ def _adapted_flows(
             steady = sign == s
             if det_rate is not None:
                 steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
+            kept = _kept(mechanism, margins, lo, hi, angles, velocity, rates)[row]
             index = first + 2 * c + row
-            flows[row, :, c, index] = ok & steady
+            flows[row, :, c, index] = ok & steady & kept
             columns = [direction[:, axis] for axis in range(k)]
             faces[index] = _exit_faces(columns, columns)
+
+
+def _constraint_normals(
+    mechanism: Mechanism,
+    margins: Any,
+    lo: Array,
+    hi: Array,
+    angles: list[Interval],
+    gradients: list[list[Interval]],
+) -> list[tuple[NDArray[np.bool_], NDArray[np.bool_], Array]]:
+    """For each constraint beyond the paper that may be active in some leaf (see
+    :meth:`~moveability.mechanisms.constraints.ConstraintMargins.rates`): where it
+    may be active at a lower bound, at an upper bound, and (n, k) the midpoints
+    of the enclosures of its gradient over the leaves (a direction only)."""
+    if margins is None:
+        return []
+    n, k = lo.shape
+    per_axis = []
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for axis in range(k):
+            along = [Interval(np.full(n, float(axis == j))) for j in range(k)]
+            rates = [g[axis] for g in gradients]
+            moving = mechanism.linkage_velocities(lo, hi, angles, along, rates)
+            per_axis.append(margins.rates(moving))
+    out = []
+    for j, (rise, fall, _) in enumerate(per_axis[0]):
+        normal = np.stack([per_axis[axis][j][2].mid for axis in range(k)], axis=1)
+        out.append((rise, fall, normal))
+    return out
 
 
 def into_corner(normals: Array) -> Array:

@@ -658,9 +658,6 @@ class Analysis:
         cross = not self.generalized_aspects
         done = [dead_or_certified(t, s, cross) for s in (1, -1)]
         nodes = np.argwhere(~done[0] | ~done[1])
-        # the flows know the joint limits only: a node where another constraint
-        # may fail gets none, so it is never attached and blocks its neighbours
-        nodes = nodes[~t.unsure[nodes[:, 0], nodes[:, 1]]]
         n, n_post = t.status.shape
         if saved is not None:
             saved_nodes, bits, exists, faces = saved
@@ -670,7 +667,7 @@ class Analysis:
                 )
         elif reuse is None:
             bits, exists, faces = flow_conditions(
-                self.mechanism, leaves.lo, leaves.hi, t, nodes, cross
+                self.mechanism, leaves.lo, leaves.hi, t, nodes
             )
         else:
             (old_nodes, old_bits, old_exists, old_faces, old_n), old_index = reuse
@@ -683,7 +680,7 @@ class Analysis:
             )
             fresh = np.flatnonzero(source < 0)
             new_bits, new_exists, new_faces = flow_conditions(
-                self.mechanism, leaves.lo, leaves.hi, t, nodes[fresh], cross
+                self.mechanism, leaves.lo, leaves.hi, t, nodes[fresh]
             )
             kept = source >= 0
             bits = np.zeros((2, nodes.shape[0], old_bits.shape[2]), dtype=np.uint64)

@@ -32,7 +32,7 @@ __all__ = ["FORMAT", "FORMAT_VERSION", "load_analysis", "save_analysis"]
 #: the ``format`` field of a saved analysis
 FORMAT = "moveability.Analysis"
 #: raised whenever the fields change
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 _FLOWS = ("nodes", "bits", "exists", "faces")
 _WHAT = "a file written by moveability analyze --out (save_analysis)"
 

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from ..hypertree.status import BOUNDARY, IN, OUT
 from ..intervals import Interval
-from ..limits import INSIDE, OUTSIDE, STRADDLES
+from ..limits import INSIDE, OUTSIDE
 from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
 from ..types import Array
 
@@ -64,11 +64,6 @@ class SheetTable:
     angles_lo, angles_hi : (n, P, n_legs) float
         Enclosure (unwrapped) of each leg's joint angle over the sheet: its
         branch where the leg is regular, both branches where it may fold.
-    unsure : (n, P) bool
-        A constraint beyond the joint limits (passive limits, obstacles,
-        collisions: :mod:`moveability.mechanisms.constraints`) may fail on
-        some configuration of the node and hold on another. The flows, which
-        know only the joint limits, attach no such node.
     """
 
     leg_status: NDArray[np.uint8]
@@ -82,7 +77,6 @@ class SheetTable:
     det_hi: NDArray[np.float64]
     angles_lo: NDArray[np.float64]
     angles_hi: NDArray[np.float64]
-    unsure: NDArray[np.bool_]
 
     @property
     def folding(self) -> NDArray[np.bool_]:
@@ -128,7 +122,6 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
     det_hi = np.zeros((n, n_post))
     angles_lo = np.zeros((n, n_post, len(legs)))
     angles_hi = np.zeros((n, n_post, len(legs)))
-    unsure = np.zeros((n, n_post), dtype=bool)
 
     singular = np.array([mechanism.identically_singular(p) for p in range(n_post)], dtype=bool)
     # limits of each leg branch, and of each leg's hull where it folds
@@ -179,9 +172,8 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
             lim_out |= code == OUTSIDE
         # passive limits, obstacles, collisions: part of what a valid configuration is
         with np.errstate(invalid="ignore"):
-            beyond = mechanism.constraint_codes(lo, hi, angles)
+            beyond = mechanism.constraint_codes(lo, hi, angles, p, leg_status == REGULAR)
         if beyond is not None:
-            unsure[:, p] = beyond == STRADDLES
             lim_in &= beyond == INSIDE
             lim_out |= beyond == OUTSIDE
         with np.errstate(invalid="ignore"):
@@ -210,7 +202,6 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         det_hi=det_hi,
         angles_lo=angles_lo,
         angles_hi=angles_hi,
-        unsure=unsure,
     )
 
 

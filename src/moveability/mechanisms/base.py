@@ -33,7 +33,7 @@ from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import INSIDE, JointLimit
 from ..types import Array
-from .constraints import Constraints, Linkage, constraint_codes
+from .constraints import ConstraintMargins, Constraints, Linkage
 
 __all__ = [
     "FOLD_INNER",
@@ -200,16 +200,52 @@ class Mechanism:
         joint-angle enclosures per leg."""
         raise NotImplementedError
 
+    def linkage_velocities(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        velocity: list[Interval],
+        rates: list[Interval],
+    ) -> dict[str, tuple[Interval, Interval]]:
+        """Enclosures of the velocities of the named points of :attr:`linkage`
+        when the pose moves at ``velocity`` (one enclosure per pose axis) and each
+        leg's joint at ``rates``, over boxes of poses with joint enclosures
+        ``angles``."""
+        raise NotImplementedError
+
     def constraint_codes(
-        self, lo: Array, hi: Array, angles: list[Interval]
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        posture: int | None = None,
+        regular: NDArray[np.bool_] | None = None,
     ) -> NDArray[np.uint8] | None:
         """Whether every configuration over each box satisfies the constraints
         (``INSIDE``), none does (``OUTSIDE``) or it cannot tell; None when the
-        mechanism has none."""
+        mechanism has none. ``posture`` and ``regular`` ((n, legs): where each
+        leg certainly does not fold) sharpen it (see :meth:`constraint_margins`)."""
+        margins = self.constraint_margins(lo, hi, angles, posture, regular)
+        return None if margins is None else margins.codes
+
+    def constraint_margins(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        posture: int | None = None,
+        regular: NDArray[np.bool_] | None = None,
+    ) -> ConstraintMargins | None:
+        """The constraints over boxes of poses and one posture's joint enclosures,
+        with their rates along motions (:class:`ConstraintMargins`); None when the
+        mechanism has none. With the ``posture`` and where its legs do not fold
+        (``regular``), the sides that the branches fix are known."""
         if self.restrictions.empty or self.linkage is None:
             return None
         points = self.linkage_points(lo, hi, angles)
-        return constraint_codes(self.restrictions, self.linkage, points)
+        branches = None if posture is None else self.postures[posture]
+        return ConstraintMargins(self.restrictions, self.linkage, points, branches, regular)
 
     def constraints_hold(self, points: Array, joints: Array) -> NDArray[np.bool_]:
         """Whether each configuration (one posture each) certainly satisfies the
@@ -325,8 +361,7 @@ class Mechanism:
         velocity: list[Interval],
         joint_rates: list[Interval],
         rows_and_partials: (
-            tuple[list[list[Interval]], list[tuple[list[list[Interval]], list[Interval]]]]
-            | None
+            tuple[list[list[Interval]], list[tuple[list[list[Interval]], list[Interval]]]] | None
         ) = None,
     ) -> Interval | None:
         """Enclosure of the rate of det A over boxes when the pose moves at
@@ -351,7 +386,7 @@ class Mechanism:
                 for axis in range(k):
                     rate = rate + along_x[j][axis] * velocity[axis]
                 moved.append(rate)
-            term = interval_det([*rows[:i], moved, *rows[i + 1:]])
+            term = interval_det([*rows[:i], moved, *rows[i + 1 :]])
             total = term if total is None else total + term
         return total
 

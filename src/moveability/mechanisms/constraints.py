@@ -27,6 +27,23 @@ says whether every configuration satisfies them all (``INSIDE``), none does
 * two segments cross when each one's end points lie strictly on both sides
   of the other's line, and are apart when both ends of one lie strictly on
   one side of the other's line.
+
+Along a motion of the pose, :class:`ConstraintMargins` encloses how fast each
+constraint moves toward or away from its bound (the certificate that no
+region hides, :mod:`moveability.analysis.flows`, needs it where a constraint
+may be active):
+
+* a passive angle turns at ``(v x v') / |v|^2 - (u x u') / |u|^2`` (u, v its
+  two links);
+* the squared distance from a point O to a segment [c, p] changes at
+  ``2 (Q - O) . ((1 - t) c' + t p' - O')``, Q the closest point and t its
+  parameter (the closest point is unique, so the distance has this
+  derivative);
+* two closed segments that are apart can only come to meet where an end
+  point of one touches the other (crossing is an open condition), so they
+  stay apart while each of the four distances from an end point to the
+  other segment stays positive: certainly so over the box, or never
+  decreasing.
 """
 
 from __future__ import annotations
@@ -43,6 +60,7 @@ from ..intervals import Interval
 from ..limits import INSIDE, OUTSIDE, STRADDLES, JointLimit
 
 __all__ = [
+    "ConstraintMargins",
     "Constraints",
     "Linkage",
     "Obstacle",
@@ -127,10 +145,23 @@ class Linkage:
     passive : mapping of str to ((str, str), (str, str))
         Each passive joint's angle: from the first link's direction to the
         second's (a link (a, b) points from a to b).
+    ends : tuple of (str, (str, str), int)
+        Sides known from the posture: the end of a leg lies on its branch's side
+        of the leg's first link, except where the leg folds.
+    det_sides : tuple of (str, (str, str), int)
+        Sides known from the sign of det A (a parallel singularity is where a
+        point crosses a link's line).
     """
 
     links: tuple[tuple[str, str], ...]
     passive: Mapping[str, tuple[tuple[str, str], tuple[str, str]]]
+    #: (point, link, leg): the point lies strictly on side ``2 b - 1`` of the link's
+    #: line (b the leg's branch; the side is the sign of ``(l1 - l0) x (point - l0)``)
+    #: wherever the leg does not fold, and on the line only where it folds
+    ends: tuple[tuple[str, tuple[str, str], int], ...] = ()
+    #: (point, link, factor): the point lies strictly on side ``factor * sign(det A)``
+    #: of the link's line wherever det A != 0
+    det_sides: tuple[tuple[str, tuple[str, str], int], ...] = ()
 
 
 def vector_angle(x: Interval, y: Interval) -> Interval:
@@ -161,18 +192,24 @@ def _clamp01(t: Interval) -> Interval:
     return Interval(np.clip(t.lo, 0.0, 1.0), np.clip(t.hi, 0.0, 1.0))
 
 
-def _disk_codes(c: Point, p: Point, obstacle: Obstacle) -> NDArray[np.uint8]:
-    """Whether the segment [c, p] certainly misses the disk (INSIDE: the constraint
-    holds), certainly meets it (OUTSIDE), or either (STRADDLES)."""
-    ox, oy = obstacle.center
+def _closest(o: Point, c: Point, p: Point) -> tuple[Interval, Point]:
+    """The parameter t of the point of the segment [c, p] closest to o, and that
+    point less o, enclosed over the boxes."""
     u = _minus(p, c)
-    w = (ox - c[0], oy - c[1])
+    w = _minus(o, c)
     length2 = iv.square(u[0]) + iv.square(u[1])
     dot = w[0] * u[0] + w[1] * u[1]
     with np.errstate(divide="ignore", invalid="ignore"):
         t = _clamp01(dot / length2)
     t = Interval(np.where(length2.lo > 0, t.lo, 0.0), np.where(length2.lo > 0, t.hi, 1.0))
-    qx, qy = c[0] + t * u[0] - ox, c[1] + t * u[1] - oy
+    return t, (c[0] + t * u[0] - o[0], c[1] + t * u[1] - o[1])
+
+
+def _disk_codes(c: Point, p: Point, obstacle: Obstacle) -> NDArray[np.uint8]:
+    """Whether the segment [c, p] certainly misses the disk (INSIDE: the constraint
+    holds), certainly meets it (OUTSIDE), or either (STRADDLES)."""
+    n = c[0].lo.shape[0]
+    _, (qx, qy) = _closest(fixed_point(obstacle.center, n), c, p)
     d2 = iv.square(qx) + iv.square(qy)
     r2 = iv.square(obstacle.radius)
     out = np.full(d2.lo.shape, STRADDLES, dtype=np.uint8)
@@ -197,6 +234,12 @@ def segment_codes(a: Point, b: Point, c: Point, d: Point) -> NDArray[np.uint8]:
     ab, cd = _minus(b, a), _minus(d, c)
     o1, o2 = _cross(ab, _minus(c, a)), _cross(ab, _minus(d, a))
     o3, o4 = _cross(cd, _minus(a, c)), _cross(cd, _minus(b, c))
+    return _crossing_codes(o1, o2, o3, o4)
+
+
+def _crossing_codes(o1: Interval, o2: Interval, o3: Interval, o4: Interval) -> NDArray[np.uint8]:
+    """:func:`segment_codes` from the sides of c, d of the line of [a, b] (o1, o2)
+    and of a, b of the line of [c, d] (o3, o4)."""
 
     def same_side(s: Interval, t: Interval) -> NDArray[np.bool_]:
         return ((s.lo > 0) & (t.lo > 0)) | ((s.hi < 0) & (t.hi < 0))
@@ -218,30 +261,350 @@ def constraint_codes(
 
     ``points`` gives the enclosure of each named point of ``linkage`` over n boxes.
     """
+    return ConstraintMargins(constraints, linkage, points).codes
+
+
+#: a distance that must stay positive: the end point (a point's name, or an
+#: obstacle's fixed centre) and the segment's two points' names, and where it
+#: may be active
+_Distance = tuple[str | Point, str, str, NDArray[np.bool_]]
+
+
+class ConstraintMargins:
+    """The constraints over n boxes of poses and one posture's joint enclosures:
+    whether each may be active there, and how fast it moves along a motion.
+
+    Parameters
+    ----------
+    constraints, linkage
+        What to enforce, and the links they are about.
+    points : mapping of str to (Interval, Interval)
+        The enclosure of each named point of ``linkage`` over the boxes.
+    branches, regular : optional
+        The posture's branch per leg, and (n, legs) where each leg certainly
+        does not fold: they give the sides of :attr:`Linkage.ends`.
+
+    Attributes
+    ----------
+    codes : (n,) uint8
+        ``INSIDE`` where every configuration satisfies every constraint,
+        ``OUTSIDE`` where one is certainly violated, ``STRADDLES`` elsewhere.
+
+    Examples
+    --------
+    A link from the origin to (2 +- 0.1, 0 +- 0.1) and a disk of radius 1 at
+    (1, 1.05): the link may touch it. Moving its free end down takes it away,
+    moving it up brings it nearer.
+
+    >>> linkage = Linkage(links=(("A", "P"),), passive={})
+    >>> box = {"A": fixed_point((0.0, 0.0), 1),
+    ...        "P": (Interval([1.9], [2.1]), Interval([-0.1], [0.1]))}
+    >>> margins = ConstraintMargins(Constraints(obstacles=(Obstacle((1.0, 1.05), 1.0),)),
+    ...                             linkage, box)
+    >>> margins.codes.tolist() == [STRADDLES]
+    True
+    >>> still = fixed_point((0.0, 0.0), 1)
+    >>> down = {"A": still, "P": fixed_point((0.0, -1.0), 1)}
+    >>> up = {"A": still, "P": fixed_point((0.0, 1.0), 1)}
+    >>> margins.kept(down).tolist(), margins.kept(up).tolist()
+    ([True], [False])
+    """
+
+    def __init__(
+        self,
+        constraints: Constraints,
+        linkage: Linkage,
+        points: Mapping[str, Point],
+        branches: Sequence[int] | None = None,
+        regular: NDArray[np.bool_] | None = None,
+    ) -> None:
+        self._points = points
+        #: (point, link) -> (the branch's side, where the leg may fold)
+        self._known: dict[tuple[str, tuple[str, str]], tuple[int, NDArray[np.bool_]]] = {}
+        if branches is not None and regular is not None:
+            for point, link, leg in linkage.ends:
+                self._known[point, link] = (2 * int(branches[leg]) - 1, ~regular[:, leg])
+        self._det_known = {(point, link): factor for point, link, factor in linkage.det_sides}
+        self._cache: dict[int, tuple[NDArray[np.bool_], Interval, Point]] = {}
+        n = self._shape = next(iter(points.values()))[0].lo.shape
+        holds = np.ones(n, dtype=bool)
+        fails = np.zeros(n, dtype=bool)
+
+        def meet(codes: NDArray[np.uint8]) -> NDArray[np.bool_]:
+            nonlocal holds, fails
+            holds &= codes == INSIDE
+            fails |= codes == OUTSIDE
+            return np.asarray(codes != INSIDE)
+
+        #: passive angles: (first link, second link, may meet the lower stop, the upper)
+        self._angles: list[tuple[tuple[str, str], tuple[str, str], Any, Any]] = []
+        self._distances: list[_Distance] = []
+        #: links that may not cross, where they may touch, and where they are
+        #: apart at every configuration off a fold (see :meth:`_across_fold`)
+        self._pairs: list[tuple[tuple[str, str], tuple[str, str], Any, Any]] = []
+        for name, limit in constraints.passive.items():
+            first_link, second_link = linkage.passive[name]
+            first = vector_angle(*_minus(points[first_link[1]], points[first_link[0]]))
+            second = vector_angle(*_minus(points[second_link[1]], points[second_link[0]]))
+            angle = second - first
+            active = meet(limit.classify(angle))
+            exists, lower, upper = limit.pieces(angle)
+            rise = active & (exists & lower).any(axis=0)
+            fall = active & (exists & upper).any(axis=0)
+            self._angles.append((first_link, second_link, rise, fall))
+        for obstacle in constraints.obstacles:
+            centre = fixed_point(obstacle.center, int(np.prod(n)))
+            for a, b in linkage.links:
+                self._distances.append(
+                    (centre, a, b, meet(_disk_codes(points[a], points[b], obstacle)))
+                )
+        if constraints.collisions:
+            for i, (a, b) in enumerate(linkage.links):
+                for c, d in linkage.links[i + 1 :]:
+                    if {a, b} & {c, d}:
+                        continue  # links sharing a joint
+                    one, other = (a, b), (c, d)
+                    active = meet(self._pair_code(one, other))
+                    fold_apart, fold_cross = self._across_fold(one, other)
+                    fails |= fold_cross
+                    self._pairs.append((one, other, active & ~fold_cross, fold_apart))
+            fails |= _pinched(linkage, points)
+        self.codes = np.where(fails, OUTSIDE, np.where(holds, INSIDE, STRADDLES)).astype(np.uint8)
+
+    def rates(
+        self, velocities: Mapping[str, Point]
+    ) -> list[tuple[NDArray[np.bool_], NDArray[np.bool_], Interval]]:
+        """For each constraint that may be active in some box: where it may be
+        active at a lower bound (it is kept when its rate is at least 0), at an
+        upper bound (kept when at most 0), and an enclosure of its rate when the
+        named points move at ``velocities`` (enclosures, per point)."""
+        out = []
+        pts = self._points
+        for (a, b), (c, d), rise, fall in self._angles:
+            if not (rise.any() or fall.any()):
+                continue
+            rate = _turn_rate(_minus(pts[d], pts[c]), _minus(velocities[d], velocities[c]))
+            rate = rate - _turn_rate(_minus(pts[b], pts[a]), _minus(velocities[b], velocities[a]))
+            out.append((rise, fall, rate))
+        for index, (end, s0, s1, _) in enumerate(self._distances):
+            near, t, q = self._closest(index)
+            if not near.any():
+                continue
+            still = fixed_point((0.0, 0.0), near.shape[0])
+            o_rate = velocities[end] if isinstance(end, str) else still
+            one_minus = 1.0 - t
+            move = (
+                one_minus * velocities[s0][0] + t * velocities[s1][0] - o_rate[0],
+                one_minus * velocities[s0][1] + t * velocities[s1][1] - o_rate[1],
+            )
+            rate = (q[0] * move[0] + q[1] * move[1]) * 2.0
+            out.append((near, np.zeros(near.shape[0], dtype=bool), rate))
+        return out
+
+    def _closest(self, index: int) -> tuple[NDArray[np.bool_], Interval, Point]:
+        """Distance ``index``: where it may be active, and the parameter and
+        offset of the closest point (computed once)."""
+        if index not in self._cache:
+            end, s0, s1, active = self._distances[index]
+            pts = self._points
+            o = pts[end] if isinstance(end, str) else end
+            t, q = _closest(o, pts[s0], pts[s1])
+            if isinstance(end, str):
+                # an end point certainly off the other link over the box needs no rate
+                with np.errstate(invalid="ignore"):
+                    active = active & ~((iv.square(q[0]) + iv.square(q[1])).lo > 0)
+            self._cache[index] = (active, t, q)
+        return self._cache[index]
+
+    def kept(self, velocities: Mapping[str, Point], det_sign: int = 0) -> NDArray[np.bool_]:
+        """Where the motion at ``velocities`` certainly keeps every constraint that
+        may be active: each one's rate is certainly of the safe sign, and each
+        pair of links that may touch stays apart (:meth:`_apart_kept`).
+
+        ``det_sign`` (+-1), when given, says that only configurations with det A
+        of that sign are moved: a pair of links whose sides that sign fixes
+        (:attr:`Linkage.det_sides`) is then apart at all of them, or at none
+        (nothing to keep)."""
+        n = self.codes.shape[0]
+        ok = np.ones(n, dtype=bool)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for rise, fall, rate in self.rates(velocities):
+                ok &= (~rise | (rate.lo >= 0)) & (~fall | (rate.hi <= 0))
+            for first, second, active, fold_apart in self._pairs:
+                if not active.any():
+                    continue
+                if det_sign and self._det_known:
+                    decided = self._pair_code(first, second, det_sign) != STRADDLES
+                    active = active & ~decided
+                ok &= ~active | fold_apart | self._apart_kept(first, second, velocities)
+        return ok
+
+    def _pair_code(
+        self, first: tuple[str, str], second: tuple[str, str], det_sign: int = 0
+    ) -> NDArray[np.uint8]:
+        """:func:`segment_codes` of two links, with the sides known (see :meth:`_side`)."""
+        return _crossing_codes(
+            self._side(second[0], first, det_sign),
+            self._side(second[1], first, det_sign),
+            self._side(first[0], second, det_sign),
+            self._side(first[1], second, det_sign),
+        )
+
+    def _side(self, point: str, link: tuple[str, str], det_sign: int = 0) -> Interval:
+        """``(l1 - l0) x (point - l0)`` over the boxes; a side known from the
+        posture (:attr:`Linkage.ends`) replaces it by +-1 where the leg does not
+        fold, and one known from the sign of det A (:attr:`Linkage.det_sides`)
+        everywhere, when ``det_sign`` (+-1) is given."""
+        pts = self._points
+        out = _cross(_minus(pts[link[1]], pts[link[0]]), _minus(pts[point], pts[link[0]]))
+        for key, flip in (((point, link), 1), ((point, link[::-1]), -1)):
+            if key in self._known:
+                side, folds = self._known[key]
+                out = Interval(
+                    np.where(folds, out.lo, flip * side), np.where(folds, out.hi, flip * side)
+                )
+            if det_sign and key in self._det_known:
+                fixed = float(flip * self._det_known[key] * det_sign)
+                out = Interval(np.full(self._shape, fixed))
+        return out
+
+    def _across_fold(
+        self, first: tuple[str, str], second: tuple[str, str]
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """Where the links are apart at every configuration off the fold, and
+        where they certainly meet, from a side known from the posture.
+
+        An end e of one link (f its other end) lies on the branch's side of the
+        other link's line [c, d] off the fold and on it at the fold. Where f is
+        certainly on one side of that line and c, d certainly on both sides of
+        the line of [e, f], the links are apart exactly where e is on f's side
+        (on the line, e is where the two lines meet, inside [c, d]): at every
+        configuration off the fold when that is the branch's side, at none when
+        it is the other."""
+        pts = self._points
+        apart = np.zeros(self._shape, dtype=bool)
+        cross = np.zeros(self._shape, dtype=bool)
+        for (e, f), line in (
+            (first, second),
+            (first[::-1], second),
+            (second, first),
+            (second[::-1], first),
+        ):
+            key = (e, line) if (e, line) in self._known else (e, line[::-1])
+            if key not in self._known:
+                continue
+            side, folds = self._known[key]
+            side = side if key[1] == line else -side
+            other = self._side(f, line)
+            own = _minus(pts[f], pts[e])
+            across = folds & _opposite(
+                _cross(own, _minus(pts[line[0]], pts[e])), _cross(own, _minus(pts[line[1]], pts[e]))
+            )
+            same = (other.lo > 0) if side > 0 else (other.hi < 0)
+            differ = (other.hi < 0) if side > 0 else (other.lo > 0)
+            apart |= across & same
+            cross |= across & differ
+        return apart, cross
+
+    def _apart_kept(
+        self, first: tuple[str, str], second: tuple[str, str], velocities: Mapping[str, Point]
+    ) -> NDArray[np.bool_]:
+        """Where two links that may touch certainly stay apart along the motion.
+
+        Either an end e of one link (f its other end) meets the other link's
+        line across it: f certainly on one side of the line of the other link
+        [c, d], and c, d certainly on both sides of the line of [e, f]. Then the
+        links are apart exactly where e is on f's side, and they stay so where
+        ``side(f) * (d - c) x (e - c)`` never decreases. Or each of the four
+        distances from an end to the other link is certainly positive over the
+        box or never decreases (see the module's notes)."""
+        pts = self._points
+        n = self.codes.shape[0]
+        ok = np.zeros(n, dtype=bool)
+        for (e, f), (c, d) in (
+            (first, second),
+            (first[::-1], second),
+            (second, first),
+            (second[::-1], first),
+        ):
+            line = _minus(pts[d], pts[c])
+            side = _cross(line, _minus(pts[f], pts[c]))
+            own = _minus(pts[f], pts[e])
+            across = _opposite(
+                _cross(own, _minus(pts[c], pts[e])), _cross(own, _minus(pts[d], pts[e]))
+            )
+            up, down = across & (side.lo > 0), across & (side.hi < 0)
+            if not (up | down).any():
+                continue
+            rate = _cross(_minus(velocities[d], velocities[c]), _minus(pts[e], pts[c]))
+            rate = rate + _cross(line, _minus(velocities[e], velocities[c]))
+            ok |= (up & (rate.lo >= 0)) | (down & (rate.hi <= 0))
+        # the four distances from an end to the other link
+        spread = np.ones(n, dtype=bool)
+        for end, (s0, s1) in (
+            (first[0], second),
+            (first[1], second),
+            (second[0], first),
+            (second[1], first),
+        ):
+            t, q = _closest(pts[end], pts[s0], pts[s1])
+            near = ~((iv.square(q[0]) + iv.square(q[1])).lo > 0)
+            if not near.any():
+                continue
+            one_minus = 1.0 - t
+            move = (
+                one_minus * velocities[s0][0] + t * velocities[s1][0] - velocities[end][0],
+                one_minus * velocities[s0][1] + t * velocities[s1][1] - velocities[end][1],
+            )
+            spread &= ~near | ((q[0] * move[0] + q[1] * move[1]).lo >= 0)
+        return ok | spread
+
+
+def _pinched(linkage: Linkage, points: Mapping[str, Point]) -> NDArray[np.bool_]:
+    """Where two links X-J and J-Y that share a joint J certainly cannot both miss
+    a third link [c, d] that shares no joint with them.
+
+    That is so where X and Y lie strictly on both sides of the line of [c, d],
+    and c, d strictly on both sides of the lines of X-J and of J-Y: wherever J
+    is, one of the two links crosses [c, d] (J on X's side: J-Y crosses; on Y's
+    side: X-J; on the line: J is on [c, d]). Each pair alone may touch there,
+    so :func:`segment_codes` cannot tell.
+    """
     n = next(iter(points.values()))[0].lo.shape
-    holds = np.ones(n, dtype=bool)
-    fails = np.zeros(n, dtype=bool)
+    out = np.zeros(n, dtype=bool)
+    ends: dict[str, list[str]] = {}
+    for a, b in linkage.links:
+        ends.setdefault(a, []).append(b)
+        ends.setdefault(b, []).append(a)
+    for joint, others in ends.items():
+        for i, x in enumerate(others):
+            for y in others[i + 1 :]:
+                for c, d in linkage.links:
+                    if {c, d} & {joint, x, y}:
+                        continue
+                    line = _minus(points[d], points[c])
+                    split = _opposite(
+                        _cross(line, _minus(points[x], points[c])),
+                        _cross(line, _minus(points[y], points[c])),
+                    )
+                    for other in (x, y):
+                        own = _minus(points[joint], points[other])
+                        split &= _opposite(
+                            _cross(own, _minus(points[c], points[other])),
+                            _cross(own, _minus(points[d], points[other])),
+                        )
+                    out |= split
+    return out
 
-    def meet(codes: NDArray[np.uint8]) -> None:
-        nonlocal holds, fails
-        holds &= codes == INSIDE
-        fails |= codes == OUTSIDE
 
-    for name, limit in constraints.passive.items():
-        (a, b), (c, d) = linkage.passive[name]
-        first = vector_angle(*_minus(points[b], points[a]))
-        second = vector_angle(*_minus(points[d], points[c]))
-        meet(limit.classify(second - first))
-    for obstacle in constraints.obstacles:
-        for a, b in linkage.links:
-            meet(_disk_codes(points[a], points[b], obstacle))
-    if constraints.collisions:
-        for i, (a, b) in enumerate(linkage.links):
-            for c, d in linkage.links[i + 1 :]:
-                if {a, b} & {c, d}:
-                    continue  # links sharing a joint
-                meet(segment_codes(points[a], points[b], points[c], points[d]))
-    return np.where(fails, OUTSIDE, np.where(holds, INSIDE, STRADDLES)).astype(np.uint8)
+def _opposite(s: Interval, t: Interval) -> NDArray[np.bool_]:
+    """Where s and t certainly have strictly opposite signs."""
+    return np.asarray(((s.lo > 0) & (t.hi < 0)) | ((s.hi < 0) & (t.lo > 0)), dtype=bool)
+
+
+def _turn_rate(u: Point, du: Point) -> Interval:
+    """The rate of the direction of a vector u moving at du: ``(u x du) / |u|^2``."""
+    return _cross(u, du) / (iv.square(u[0]) + iv.square(u[1]))
 
 
 def fixed_point(xy: Sequence[float], n: int) -> Point:

@@ -115,6 +115,9 @@ class FiveBar(Mechanism):
             "C": (("A", "C"), ("C", "P")),
             "D": (("B", "D"), ("D", "P")),
         },
+        ends=(("P", ("A", "C"), 0), ("P", ("B", "D"), 1)),
+        # det A = (P - D) x (C - D): C is on its side of D-P, D on the other of C-P
+        det_sides=(("C", ("D", "P"), 1), ("D", ("C", "P"), -1)),
     )
 
     def linkage_points(
@@ -130,6 +133,24 @@ class FiveBar(Mechanism):
             )
         points["P"] = (Interval(lo[:, 0], hi[:, 0]), Interval(lo[:, 1], hi[:, 1]))
         return points
+
+    def linkage_velocities(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        velocity: list[Interval],
+        rates: list[Interval],
+    ) -> dict[str, tuple[Interval, Interval]]:
+        """A and B still, each elbow turning with its joint about its base (``L
+        theta' (-sin theta, cos theta)``), P at the pose's velocity."""
+        n = lo.shape[0]
+        still = fixed_point((0.0, 0.0), n)
+        out = {"A": still, "B": still, "P": (velocity[0], velocity[1])}
+        for name, leg, a, rate in zip(("C", "D"), self.rr_legs, angles, rates, strict=True):
+            speed = rate * leg.proximal
+            out[name] = (-(iv.sin(a) * speed), iv.cos(a) * speed)
+        return out
 
     def _crossings(self) -> list[Interval]:
         """Enclosures (x, y intervals, as one Interval of shape (2,)) of the points
