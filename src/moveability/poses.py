@@ -15,25 +15,36 @@ from .types import Array
 __all__ = ["parse_points", "read_points"]
 
 
-def read_points(source: str, pose_names: Sequence[str]) -> Array:
+def read_points(source: str, pose_names: Sequence[str], option: str = "POINTS") -> Array:
     """Read poses from a CSV file, or from stdin when ``source`` is ``-``.
 
-    See :func:`parse_points` for the format.
+    See :func:`parse_points` for the format. Errors name ``option``, the argument
+    or option that gave ``source`` as the user typed it (``POINTS``, ``--points``);
+    the errors of an option's file name the file too.
+
+    Examples
+    --------
+    >>> read_points("no-such.csv", ("x", "y"), "--points")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+        ...
+    moveability.errors.InvalidParameterError: invalid --points: expected an existing CSV file...
     """
+    shown = "<stdin>" if source == "-" else source
+    name = shown if option == "POINTS" else f"{option} ({shown})"
     if source == "-":
-        return parse_points(sys.stdin, pose_names, "<stdin>")
+        return parse_points(sys.stdin, pose_names, name)
     try:
         with open(source, newline="", encoding="utf-8-sig") as stream:
-            return parse_points(stream, pose_names, source)
+            return parse_points(stream, pose_names, name)
     except FileNotFoundError:
         raise InvalidParameterError(
-            "POINTS", "an existing CSV file or - for stdin", source
+            option, "an existing CSV file or - for stdin", source
         ) from None
     except OSError as error:
         reason = error.strerror or type(error).__name__
-        raise InvalidParameterError("POINTS", f"a readable CSV file ({reason})", source) from None
+        raise InvalidParameterError(option, f"a readable CSV file ({reason})", source) from None
     except UnicodeDecodeError:
-        raise InvalidParameterError("POINTS", "a UTF-8 CSV file", source) from None
+        raise InvalidParameterError(option, "a UTF-8 CSV file", source) from None
 
 
 def parse_points(

@@ -16,11 +16,12 @@ from scipy import ndimage
 from moveability import analyze, default_poses, load_spec, plan_motion
 from moveability.cli import main
 from moveability.hypertree.measurement import locate
-from moveability.hypertree.status import IN
+from moveability.hypertree.status import IN, OUT
 from moveability.output import plot as plot_module
-from moveability.output.axes import PALETTE, UNDECIDED
+from moveability.output.axes import EXCLUDED, PALETTE, UNDECIDED
 from moveability.output.plot import (
     MAX_POSTURE_CHANGES,
+    WORKSPACE_PAD,
     animate_path,
     figure,
     joint_space_raster,
@@ -221,6 +222,29 @@ def test_regions_panels_areas_and_overlay(result, biglide):
             assert mixtures == ["W_N0 and W_N1 (overlay)"]
 
 
+def test_regions_panels_frame_the_workspace(result, biglide):
+    """Each panel encloses every cell of W (certified or undecided) and no more
+    than their box widened by the margin; equal scales on both axes."""
+    for analysis in (result, biglide):
+        fig = plot_regions(analysis)
+        fig.canvas.draw()
+        leaves = analysis.tree.leaves()
+        possible = (analysis.table.status != OUT).any(axis=1)
+        lo, hi = leaves.lo[possible].min(axis=0), leaves.hi[possible].max(axis=0)
+        margin = WORKSPACE_PAD * float((hi - lo).max())
+        assert margin > 0
+        for ax in _shown(fig):
+            assert ax.get_aspect() == 1.0
+            view = np.array([sorted(ax.get_xlim()), sorted(ax.get_ylim())])
+            assert (view[:, 0] <= lo).all() and (view[:, 1] >= hi).all()
+            assert (view[:, 0] >= lo - margin - 1e-9).all()
+            assert (view[:, 1] <= hi + margin + 1e-9).all()
+        # the paper's W leaves most of the lower half of its pose box empty: the
+        # panels no longer show it
+        if analysis is result:
+            assert view[1, 0] > analysis.mechanism.bounds[0][1] + 5.0
+
+
 # ------------------------------------------------------------ joint space
 def _knees(m, q):
     if m.name == "biglide":
@@ -329,7 +353,7 @@ def test_user_defined_joint_space_is_sampled_inside_d():
     pytest.importorskip("sympy")
     analysis = analyze(load_spec("examples/five-bar-custom.toml"), precision=0.3)
     q1, q2, holds = joint_space_raster(analysis, resolution=90)
-    assert holds.shape == (30, 30, len(analysis.regions) + 1)
+    assert holds.shape == (30, 30, len(analysis.regions) + 2)
     reference = load_spec(SPEC)
     m = analyze(reference, precision=0.5).mechanism
     g1, g2 = np.meshgrid(q1, q2)
@@ -535,3 +559,148 @@ def test_cli_plot_files(tmp_path):
         main, ["plot", SPEC, "--figure", "regions", "--out", str(tmp_path / "p.jpg")]
     )
     assert bad.exit_code == 2 and "--out" in bad.output
+
+
+# ------------------------------------------------ constraints beyond the paper
+#: the five-bar of the constraint tests: L0..L4, unlimited actuated joints
+_CONSTRAINED = {
+    "mechanism": "five-bar",
+    "parameters": {"L0": 9.0, "L1": 8.0, "L2": 5.0, "L3": 5.0, "L4": 8.0},
+    "limits": {"theta1": "unlimited", "theta2": "unlimited"},
+}
+_OBSTACLE = ((4.5, 0.0), 1.0)
+
+
+def _reference_exclusion(q1, q2, passive, obstacle):
+    """An independent pointwise check over the grid (q1[a], q2[b]), indexed [b, a]:
+    where the legs meet, where some configuration violates a constraint, and
+    where every configuration does. Passive limit [-pi/2, pi/2] at P: the angle
+    from CP to DP is beyond a right angle exactly where (P - C) . (P - D) < 0;
+    obstacle: some moving link comes nearer its centre than its radius."""
+    L0, L1, L2, L3, L4 = (_CONSTRAINED["parameters"][f"L{i}"] for i in range(5))
+    t1, t2 = np.meshgrid(q1, q2)
+    A = np.zeros((*t1.shape, 2))
+    B = A + np.array([L0, 0.0])
+    C = np.stack([L1 * np.cos(t1), L1 * np.sin(t1)], axis=-1)
+    D = np.stack([L0 + L3 * np.cos(t2), L3 * np.sin(t2)], axis=-1)
+    v = D - C
+    d = np.hypot(v[..., 0], v[..., 1])
+    meet = (d > abs(L2 - L4)) & (d < L2 + L4)
+    with np.errstate(invalid="ignore"):
+        along = (L2**2 - L4**2 + d**2) / (2 * d)
+        across = np.sqrt(L2**2 - along**2)
+    e = v / d[..., None]
+    normal = np.stack([-e[..., 1], e[..., 0]], axis=-1)
+
+    def distance(o, c, p):
+        u = p - c
+        t = np.clip(((o - c) * u).sum(-1) / (u * u).sum(-1), 0.0, 1.0)
+        return np.hypot(*np.moveaxis(c + t[..., None] * u - o, -1, 0))
+
+    bad = []
+    for side in (1.0, -1.0):
+        P = C + along[..., None] * e + side * across[..., None] * normal
+        violates = np.zeros(meet.shape, dtype=bool)
+        if passive:
+            violates |= ((P - C) * (P - D)).sum(-1) < 0
+        if obstacle:
+            centre, radius = np.array(_OBSTACLE[0]), _OBSTACLE[1]
+            for c, p in ((A, C), (C, P), (B, D), (D, P)):
+                violates |= distance(centre, c, p) < radius
+        bad.append(meet & violates)
+    return meet, bad[0] | bad[1], meet & bad[0] & bad[1]
+
+
+def _on_boundary(mask):
+    """Cells of a mask or next to one (3 x 3) that are not deep inside or outside it."""
+    grow = ndimage.binary_dilation(mask, np.ones((3, 3), dtype=bool))
+    shrink = ndimage.binary_erosion(mask, np.ones((3, 3), dtype=bool), border_value=1)
+    return grow & ~shrink
+
+
+@pytest.mark.parametrize("kind", ["passive", "obstacle"])
+def test_joint_space_marks_configurations_excluded_by_constraints(kind):
+    spec = dict(_CONSTRAINED)
+    if kind == "passive":
+        spec["passive_limits"] = {"P": ["-pi/2", "pi/2"]}
+    else:
+        spec["obstacles"] = [{"center": list(_OBSTACLE[0]), "radius": _OBSTACLE[1]}]
+    analysis = analyze(load_spec(spec), precision=0.2)
+    n_regions = len(analysis.regions)
+    q1, q2, holds = joint_space_raster(analysis, resolution=150)
+    assert holds.shape == (150, 150, n_regions + 2)
+    meet, some, every = _reference_exclusion(q1, q2, kind == "passive", kind == "obstacle")
+    layer = holds[..., n_regions + 1]
+    # a sizeable part of Q is excluded, and only where the legs meet
+    assert some.mean() > 0.05 and not (layer & ~meet).any()
+    # the excluded layer is the reference's, but for a few cells on its boundary
+    wrong = layer ^ some
+    assert wrong.sum() <= 5, wrong.sum()
+    assert not (wrong & ~(_on_boundary(some) | _on_boundary(meet))).any()
+    # no configuration is both certified in a region and excluded
+    assert not (holds[..., :n_regions].any(axis=2) & every).any()
+
+    # the figure: the excluded colour exactly where every configuration is excluded
+    fig = plot_joint_space(analysis, resolution=150)
+    ax = fig.axes[0]
+    (image,) = ax.get_images()
+    rgba = np.asarray(image.get_array())
+    pale = np.isclose(rgba[..., :3], to_rgb(EXCLUDED), atol=1e-9).all(axis=2) & (rgba[..., 3] == 1)
+    wrong = pale ^ every
+    assert every.any() and wrong.sum() <= 5, wrong.sum()
+    assert not (wrong & ~(_on_boundary(every) | _on_boundary(meet))).any()
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    cause = "a passive joint limit" if kind == "passive" else "an obstacle"
+    assert f"excluded by {cause}" in texts
+    legend = ax.get_legend()
+    handle = legend.legend_handles[texts.index(f"excluded by {cause}")]
+    assert np.allclose(to_rgb(handle.get_facecolor()), to_rgb(EXCLUDED))
+
+
+def test_joint_space_of_an_unconstrained_design_excludes_nothing(result):
+    _, _, holds = joint_space_raster(result, resolution=90)
+    assert holds.shape[2] == len(result.regions) + 2
+    assert holds[..., : len(result.regions) + 1].any() and not holds[..., -1].any()
+    ax = plot_joint_space(result, resolution=90).axes[0]
+    rgba = np.asarray(ax.get_images()[0].get_array())
+    assert not np.isclose(rgba[..., :3], to_rgb(EXCLUDED), atol=1e-9).all(axis=2).any()
+    assert not any("excluded" in t.get_text() for t in ax.get_legend().get_texts())
+
+
+# ------------------------------------------------------------- plot --points
+@pytest.mark.parametrize(
+    ("content", "expected"),
+    [
+        (None, "invalid --points: expected an existing CSV file"),
+        ("x,y\n", "invalid --points ("),
+        ("x,y\n1,nan\n", "invalid --points ("),
+        ("a,b\n1,2\n", "invalid --points ("),
+    ],
+)
+def test_cli_plot_points_errors_name_the_option(tmp_path, content, expected):
+    path = tmp_path / "poses.csv"
+    if content is not None:
+        path.write_text(content)
+    out = tmp_path / "path.png"
+    done = CliRunner().invoke(
+        main,
+        ["plot", SPEC, "--figure", "path", "--points", str(path), "--out", str(out), "-p", "0.5"],
+    )
+    assert done.exit_code == 2, done.output
+    assert done.stdout == ""
+    message = done.stderr
+    assert message.startswith("Error: " + expected), message
+    assert message.count("\n") == 1 and "POINTS" not in message and "Traceback" not in message
+    assert not out.exists()
+
+
+def test_cli_plot_points_only_for_the_path_figure(tmp_path):
+    path = tmp_path / "poses.csv"
+    path.write_text("x,y\n3.5,6\n")
+    done = CliRunner().invoke(
+        main,
+        ["plot", SPEC, "--figure", "regions", "--points", str(path), "--out",
+         str(tmp_path / "r.png")],
+    )  # fmt: skip
+    assert done.exit_code == 2 and done.stderr.count("\n") == 1
+    assert done.stderr.startswith("Error: invalid --points: only the path figure")

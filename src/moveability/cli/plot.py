@@ -128,6 +128,8 @@ def plot_command(
         raise InputError(f"invalid --phi: expected finite angles, got {list(phis)!r}")
     if pose is not None and name != "postures":
         raise InputError("invalid --pose: only the postures figure takes a pose")
+    if points is not None and name != "path":
+        raise InputError("invalid --points: only the path figure takes poses")
     check_file(out, "--out", overwrite, (".gif",) if animate else (".png", ".svg"))
     at = _pose(pose)
     with running.reporting_errors():
@@ -137,7 +139,9 @@ def plot_command(
         _check_figure(name, mechanism)
         if at is not None:
             _check_pose(at, mechanism)
-        poses = read_points(points, mechanism.pose_names) if points else None
+        poses = None
+        if points is not None:
+            poses = read_points(points, mechanism.pose_names, "--points")
         from ..analysis.planning import default_poses, plan_motion
         from ..output.plot import animate_path, figure, plot_postures
 

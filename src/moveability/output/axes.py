@@ -17,6 +17,7 @@ if TYPE_CHECKING:
     from ..mechanisms.base import Mechanism
 
 __all__ = [
+    "EXCLUDED",
     "FONT",
     "PALETTE",
     "UNDECIDED",
@@ -35,6 +36,9 @@ __all__ = [
 #: Okabe-Ito colours
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000")
 UNDECIDED = "#BBBBBB"
+#: configurations that a constraint beyond the paper excludes (a passive joint
+#: limit, an obstacle, a link collision): a pale rose, apart from the palette and grey
+EXCLUDED = "#F2C9C0"
 #: font sizes (points) shared by the figures of :mod:`moveability.output.plot`
 FONT = {"suptitle": 11.0, "title": 9.5, "label": 9.0, "tick": 8.0, "legend": 8.0}
 

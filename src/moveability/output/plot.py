@@ -23,6 +23,7 @@ from ..hypertree.status import IN, OUT
 from ..intervals import Interval
 from ..types import Array
 from .axes import (
+    EXCLUDED,
     FONT,
     PALETTE,
     UNDECIDED,
@@ -50,6 +51,7 @@ __all__ = [
     "FIGURES_3D",
     "MAX_POSTURE_CHANGES",
     "PALETTE",
+    "WORKSPACE_PAD",
     "animate_path",
     "figure",
     "figures_for",
@@ -383,20 +385,41 @@ def _mixture_label(names: list[str]) -> str:
     return ", ".join(names[:-1]) + " and " + names[-1]
 
 
+#: margin around the workspace in the regions figure, a fraction of its larger side
+WORKSPACE_PAD = 0.03
+
+
+def _workspace_box(result: Analysis, pad: float = WORKSPACE_PAD) -> tuple[Array, Array]:
+    """The box of the cells of W certified or undecided (not out for every
+    posture), widened by ``pad`` of its larger side; the pose box when W is empty."""
+    possible = (result.table.status != OUT).any(axis=1)
+    if not possible.any():
+        lo, hi = result.mechanism.bounds
+        return np.asarray(lo[:2], dtype=np.float64), np.asarray(hi[:2], dtype=np.float64)
+    leaves = result.tree.leaves()
+    return _fit_box(np.concatenate([leaves.lo[possible], leaves.hi[possible]])[:, :2], pad)
+
+
 def plot_regions(result: Analysis, axes: Sequence[Axes] | None = None) -> Figure:
     """Each N-connected region W_Nj (one panel each) and an overlay.
 
     Solid: certified part of W_Nj; pale: where W_Nj may extend (undecided band).
     The overlay draws the certified parts; where several regions hold a pose
     it takes the mean of their colours, and the legend names each mixture.
+    Every panel frames the workspace (its certified and undecided cells, with a
+    margin of :data:`WORKSPACE_PAD`) at equal scales.
     """
     m = result.mechanism
     regions = result.regions
     n = len(regions) + 1
-    lo, hi = m.bounds
+    lo, hi = _workspace_box(result)
     cols = min(n, 3)
     if axes is None:
         axes = panels(n, 3, 4.2, aspect=_box_aspect(lo, hi))
+        # room for the figure's title and the legend below the panels (two entries
+        # a region): the panels frame W tightly and leave none to spare
+        rows = int(np.ceil(2 * len(regions) / min(4, max(2, len(regions)))))
+        figure_of(axes[0]).set_figheight(figure_of(axes[0]).get_figheight() + 0.3 + 0.15 * rows)
     fig = figure_of(axes[0])
     leaves = result.tree.leaves()
     overlay = axes[len(regions)]
@@ -543,6 +566,21 @@ def _joint_box(mechanism: Mechanism) -> tuple[Array, Array]:
     return lo, hi
 
 
+def _raster_layers(
+    mechanism: Mechanism, poses: Array, joints: Array, labels: NDArray[np.int64], n_regions: int
+) -> NDArray[np.int64]:
+    """The layer of :func:`joint_space_raster` of each configuration (pose, joints):
+    its region when certified in one (``labels`` >= 0), else ``n_regions + 1``
+    where a constraint beyond the paper excludes it (checked at the configuration
+    itself), else ``n_regions`` (undecided)."""
+    layers = np.where(labels >= 0, labels, n_regions)
+    if mechanism.restrictions.empty or not len(labels):
+        return layers
+    with np.errstate(invalid="ignore", divide="ignore"):
+        excluded = ~mechanism.constraints_hold(poses, joints)
+    return np.where((labels < 0) & excluded, n_regions + 1, layers)
+
+
 def joint_space_raster(
     result: Analysis, resolution: int = 300
 ) -> tuple[Array, Array, NDArray[np.bool_]]:
@@ -568,10 +606,16 @@ def joint_space_raster(
     -------
     q1, q2 : ndarray, shape (resolution,)
         Joint values at the centres of the cells along each axis.
-    holds : ndarray of bool, shape (resolution, resolution, R + 1)
+    holds : ndarray of bool, shape (resolution, resolution, R + 2)
         ``holds[b, a, j]``: a configuration over ``(q1[a], q2[b])`` is certified in
         ``result.regions[j]``; ``holds[b, a, R]``: one is not certified in any
-        listed region (undecided at the precision).
+        listed region (undecided at the precision); ``holds[b, a, R + 1]``: one
+        is excluded by a constraint beyond the paper (a passive joint limit, an
+        obstacle, a link collision: ``[passive_limits]``, ``[[obstacles]]``,
+        ``[collisions]``), by the mechanism's pointwise check
+        (:meth:`~moveability.mechanisms.base.Mechanism.constraints_hold`) of
+        that very configuration. A configuration certified in a region is
+        counted there only.
 
     Examples
     --------
@@ -579,7 +623,7 @@ def joint_space_raster(
     >>> from moveability.mechanisms import FiveBar
     >>> result = analyze(FiveBar(), precision=0.5)
     >>> q1, q2, holds = joint_space_raster(result, resolution=40)
-    >>> holds.shape == (40, 40, len(result.regions) + 1)
+    >>> holds.shape == (40, 40, len(result.regions) + 2)
     True
     """
     from ..errors import InvalidParameterError
@@ -597,18 +641,17 @@ def joint_space_raster(
         n = max(2, n // 3)
     centres = [lo[i] + (np.arange(n) + 0.5) * (hi[i] - lo[i]) / n for i in range(2)]
     n_regions = len(result.regions)
-    holds = np.zeros((n, n, n_regions + 1), dtype=bool)
+    holds = np.zeros((n, n, n_regions + 2), dtype=bool)
     if _dyads(m):
         g1, g2 = np.meshgrid(centres[0], centres[1])
         joints = np.stack([g1.ravel(), g2.ravel()], axis=1)
-        flat = holds.reshape(n * n, n_regions + 1)
+        flat = holds.reshape(n * n, n_regions + 2)
         poses = _assemblies(m, joints)
         for s in range(2):
             x = poses[:, s]
-            labels = _configuration_regions(result, x, joints)
-            present = np.isfinite(x).all(axis=1)
-            rows = np.flatnonzero(present)
-            flat[rows, np.where(labels[rows] >= 0, labels[rows], n_regions)] = True
+            rows = np.flatnonzero(np.isfinite(x).all(axis=1))
+            labels = _configuration_regions(result, x, joints)[rows]
+            flat[rows, _raster_layers(m, x[rows], joints[rows], labels, n_regions)] = True
         return centres[0], centres[1], holds
     # no forward kinematics: configurations of a grid of poses mark their cells
     box_lo, box_hi = result.tree.lo, result.tree.hi
@@ -635,7 +678,7 @@ def joint_space_raster(
         for i, lim in enumerate(m.limits):
             v = lim.wrap(qp[valid, i])
             cell.append(np.clip(((v - lo[i]) / (hi[i] - lo[i]) * n).astype(np.int64), 0, n - 1))
-        holds[cell[1], cell[0], np.where(labels >= 0, labels, n_regions)] = True
+        holds[cell[1], cell[0], _raster_layers(m, x[valid], qp[valid], labels, n_regions)] = True
     return centres[0], centres[1], holds
 
 
@@ -674,13 +717,39 @@ def _singular_texts(mechanism: Mechanism) -> tuple[str, str]:
     return "|C1C2| = b1 + b2", "|C1C2| = |b1 - b2|"
 
 
-def _trace_label(result: Analysis, members: NDArray[np.intp], undecided: bool) -> str:
+def _exclusion_text(mechanism: Mechanism) -> str:
+    """What excludes configurations beyond the paper's hypotheses: ``a passive joint
+    limit``, ``an obstacle``, ``a link collision``, or some of them."""
+    r = mechanism.restrictions
+    causes = [
+        text
+        for present, text in (
+            (bool(r.passive), "a passive joint limit"),
+            (bool(r.obstacles), "an obstacle"),
+            (r.collisions, "a link collision"),
+        )
+        if present
+    ]
+    if len(causes) > 1:
+        return ", ".join(causes[:-1]) + " or " + causes[-1]
+    return causes[0] if causes else "a constraint"
+
+
+def _trace_label(
+    result: Analysis, members: NDArray[np.intp], undecided: bool, excluded: bool = False
+) -> str:
     names = [f"R{result.regions[j].id} ({_sign_text(result.regions[j].sign)})" for j in members]
+    cause = _exclusion_text(result.mechanism)
     if not names:
-        return "undecided at this precision"
+        if undecided and excluded:
+            return f"undecided and excluded by {cause}, one configuration each"
+        return f"excluded by {cause}" if excluded else "undecided at this precision"
     text = _mixture_label(names)
-    if undecided:
-        return f"{text} and an undecided one"
+    others = (["an undecided one"] if undecided else []) + (
+        [f"one excluded by {cause}"] if excluded else []
+    )
+    if others:
+        return f"{text} and {' and '.join(others)}"
     if len(names) > 1:
         return f"{text}, one configuration each"
     return text
@@ -693,7 +762,9 @@ def plot_joint_space(result: Analysis, ax: Axes | None = None, resolution: int =
     :func:`joint_space_raster`) takes the colour of the regions its
     configurations lie in; where two configurations over one joint vector lie
     in two regions (two assembly modes), the cell takes the mean of their
-    colours, and grey stands for a configuration undecided at the precision.
+    colours, grey stands for a configuration undecided at the precision and
+    pale rose for one that a constraint beyond the paper (a passive joint limit,
+    an obstacle, a link collision) excludes, checked at the configuration itself.
     The legend names every mixture drawn. For two dyads the parallel
     singularities (the knees as far apart as the distal links reach, or as near
     as their difference) are drawn on top, and the joint limits as dash-dotted
@@ -705,14 +776,14 @@ def plot_joint_space(result: Analysis, ax: Axes | None = None, resolution: int =
     n_regions = len(result.regions)
     n = q1.size
     lo, hi = _joint_box(m)
-    colors = [*(PALETTE[j % len(PALETTE)] for j in range(n_regions)), UNDECIDED]
+    colors = [*(PALETTE[j % len(PALETTE)] for j in range(n_regions)), UNDECIDED, EXCLUDED]
     image = np.zeros((n, n, 4))
-    combos, which = np.unique(holds.reshape(n * n, n_regions + 1), axis=0, return_inverse=True)
+    combos, which = np.unique(holds.reshape(n * n, n_regions + 2), axis=0, return_inverse=True)
     which = np.asarray(which).reshape(n, n)
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    entries: list[tuple[tuple[int, int], Any]] = []
+    entries: list[tuple[tuple[int, int, int], Any]] = []
     for c, combo in enumerate(combos):
         members = np.flatnonzero(combo)
         if not members.size:
@@ -720,10 +791,12 @@ def plot_joint_space(result: Analysis, ax: Axes | None = None, resolution: int =
         color = mix_colors([colors[j] for j in members])
         image[which == c] = (*color, 1.0)
         regions_in = members[members < n_regions]
-        undecided = bool(combo[n_regions])
-        label = _trace_label(result, regions_in, undecided)
-        # mixtures of two regions first, undecided last
-        entries.append(((-regions_in.size, int(undecided)), Patch(color=color, label=label)))
+        undecided, excluded = bool(combo[n_regions]), bool(combo[n_regions + 1])
+        label = _trace_label(result, regions_in, undecided, excluded)
+        # mixtures of two regions first, then each region alone, undecided and
+        # excluded last
+        order = (-regions_in.size, int(excluded) + 2 * int(not regions_in.size), int(undecided))
+        entries.append((order, Patch(color=color, label=label)))
     handles: list[Any] = [h for _, h in sorted(entries, key=lambda e: e[0])]
     ax.imshow(
         image,

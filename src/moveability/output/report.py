@@ -51,7 +51,8 @@ _CAPTIONS = {
     "several regions hold a pose).",
     "joint-space": "The joint space Q, each joint vector coloured by the regions its "
     "configurations lie in (mixed colours where its assembly modes lie in two regions; "
-    "grey: undecided), with the joint limits.",
+    "grey: undecided; pale rose: excluded by a passive joint limit, an obstacle or a "
+    "link collision), with the joint limits.",
     "path": "Snapshots of the planned motion: its first and last configurations, each "
     "posture change and the poses asked, X1, ..., Xm.",
     "slices": "Slices of the regions at four orientations (solid: certified; light: where a "
