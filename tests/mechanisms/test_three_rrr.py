@@ -124,3 +124,18 @@ def test_regions_have_both_signs_and_periodic_phi(result):
     assert (
         result.locate(pose)["points"][0]["regions"] == result.locate(turned)["points"][0]["regions"]
     )
+
+
+def test_no_upper_bound_without_flows():
+    """The 3-RRR's legs give no flows (no certificate that a region cannot hide
+    in an uncertified node): those nodes stay open and no upper bound is claimed."""
+    from pathlib import Path
+
+    from moveability.analysis.flows import supports_flows
+
+    example = Path(__file__).resolve().parents[2] / "examples" / "three-rrr.toml"
+    mechanism = load_spec(example)
+    assert not supports_flows(mechanism)
+    result = analyze(mechanism, precision=(1.0, 1.0, 0.4))
+    assert result.open_nodes.any()
+    assert result.count[0] >= 1 and result.count[1] is None

@@ -338,17 +338,23 @@ def _posture_flows(
     faces = np.zeros((n_flows, rows.size), dtype=np.uint8)
     for ff, field in enumerate(fields):
         faces[ff] = field.faces
-    if not rows.size or not supports_flows(mechanism):
+    if not rows.size:
+        return flows, exists, faces
+    combos = [
+        [(c >> split.index(i)) & 1 if i in split else 0 for i in range(n_legs)]
+        for c in range(slots)
+    ]
+    pieces = [mechanism.limits[i].pieces(angles[i]) for i in range(n_legs)]
+    for c in range(slots):
+        exists[:, c] = np.logical_and.reduce([pieces[i][0][combos[c][i]] for i in range(n_legs)])
+    if not supports_flows(mechanism):
+        # no flow: every piece that may exist stays open (none is attached)
         return flows, exists, faces
     leg_status = table.leg_status[rows]
     regular = leg_status == REGULAR
     folding = ~regular & (leg_status != REACH_UNKNOWN) & (leg_status != REACH_OUT)
     usable = ~(leg_status == REACH_UNKNOWN).any(axis=1)
     sign = table.sign[rows, p]
-    combos = [
-        [(c >> split.index(i)) & 1 if i in split else 0 for i in range(n_legs)]
-        for c in range(slots)
-    ]
 
     def quiet() -> Any:
         return np.errstate(invalid="ignore", divide="ignore", over="ignore")
@@ -359,9 +365,6 @@ def _posture_flows(
             for i, leg in enumerate(mechanism.legs)
         ]
         known = mechanism.rows_and_partials(blo, bhi, angles)
-    pieces = [mechanism.limits[i].pieces(angles[i]) for i in range(n_legs)]
-    for c in range(slots):
-        exists[:, c] = np.logical_and.reduce([pieces[i][0][combos[c][i]] for i in range(n_legs)])
     fold_cache: list[dict[str, Any]] = [{} for _ in range(n_legs)]
     with quiet():
         margins = mechanism.constraint_margins(blo, bhi, angles, p, regular)
