@@ -350,3 +350,19 @@ def test_postures_are_numbered_alike():
     assert (np.isfinite(joints) == np.isfinite(ours)).all() and both.any()
     assert np.abs(np.angle(np.exp(1j * (joints[both] - ours[both])))).max() < 1e-9
     assert list(itertools.product((0, 1), repeat=3)) == [tuple(b) for b in m.postures]
+
+
+def test_the_readme_example():
+    """examples/three-rpr-passive.toml: the README's first pose is a valid
+    configuration, the second only of the plain 3-RPR (two links cross)."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "three-rpr-passive.toml"
+    m = from_spec(path)
+    assert m.name == "3-RPR" and m.restrictions.collisions
+    extra = _reference(load_spec(path))
+    poses = np.array([[5.3, 11.5, 0.27], [12.9, 0.64, 2.7]])
+    assert valid_postures(m, poses, **extra)[0][:, 0].tolist() == [True, False]
+    assert valid_postures(m, poses)[0][:, 0].tolist() == [True, True]
+    answers = analyze(m, precision=(1.5, 1.5, 0.2), resolve=False).locate(poses)["points"]
+    assert [a["workspace"] for a in answers] == [True, False]
