@@ -68,6 +68,8 @@ MECHANISMS: dict[str, Registered] = {
             joints=tuple(f"rho{i}" for i in _THREE),
             kinds={"base": "points", "platform": "points"},
             joint_kind="distance",
+            passive=(*(f"A{i}" for i in _THREE), *(f"B{i}" for i in _THREE)),
+            shapes=True,
         ),
     ),
     "biglide": Registered(
@@ -85,6 +87,8 @@ MECHANISMS: dict[str, Registered] = {
                 "proximal": "lengths",
                 "distal": "lengths",
             },
+            passive=(*(f"C{i}" for i in _THREE), *(f"B{i}" for i in _THREE)),
+            shapes=True,
         ),
     ),
     "custom": Registered("custom:CustomMechanism", None, extra="custom"),

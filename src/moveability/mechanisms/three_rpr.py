@@ -11,6 +11,19 @@ solution, hence one posture. The constraint is
 and half its joint derivative, ``-rho_i``, is the leg's term of B (a serial
 singularity only where a leg has zero length). ``phi`` turns freely: the third
 pose axis is periodic, over ``[-pi, pi]``.
+
+The linkage (for ``[passive_limits]``, ``[[obstacles]]`` and ``[collisions]``,
+see :mod:`moveability.mechanisms.constraints`) names the base joints ``A1``..
+``A3`` and the platform joints ``B1``..``B3``. Its links are the legs
+``A_i B_i`` and the platform's sides ``B1 B2``, ``B2 B3``, ``B3 B1``. Both
+revolute joints of a leg are passive:
+
+``A_i``
+    the base joint angle: from the base side ``A_i -> A_{i+1}`` (``A4`` is
+    ``A1``) to the leg ``A_i -> B_i``;
+``B_i``
+    the platform joint angle: from the leg ``A_i -> B_i`` to the platform side
+    ``B_i -> B_{i+1}`` (``B4`` is ``B1``).
 """
 
 from __future__ import annotations
@@ -35,8 +48,14 @@ from .base import (
     round_up,
     three_points,
 )
+from .constraints import Linkage, fixed_point
+from .platform import platform_points, platform_sides, platform_velocities
 
 __all__ = ["RPRLeg", "ThreeRPR"]
+
+_THREE = ("1", "2", "3")
+#: each joint's index and the next one's, cyclically
+_NEXT = (("1", "2"), ("2", "3"), ("3", "1"))
 
 
 @dataclass(frozen=True)
@@ -194,6 +213,17 @@ class ThreeRPR(Mechanism):
     pose_names = ("x", "y", "phi")
     periodic_axes = (2,)
 
+    #: the legs A_i B_i and the platform's sides; passive angles at the base joints
+    #: A_i (from A_i A_{i+1} to A_i B_i) and the platform joints B_i (from A_i B_i
+    #: to B_i B_{i+1})
+    linkage = Linkage(
+        links=(*((f"A{i}", f"B{i}") for i in _THREE), *platform_sides()),
+        passive={
+            **{f"A{i}": ((f"A{i}", f"A{j}"), (f"A{i}", f"B{i}")) for i, j in _NEXT},
+            **{f"B{i}": ((f"A{i}", f"B{i}"), (f"B{i}", f"B{j}")) for i, j in _NEXT},
+        },
+    )
+
     def __init__(
         self,
         base: object,
@@ -265,7 +295,40 @@ class ThreeRPR(Mechanism):
                 "platform": [list(b) for b in self.platform],
             },
             "limits": self._strokes(),
+            **self.restrictions.to_spec(),
         }
 
     def __repr__(self) -> str:
-        return f"ThreeRPR(base={self.base}, platform={self.platform}, limits={self._strokes()})"
+        extra = "" if self.restrictions.empty else f", restrictions={self.restrictions}"
+        return (
+            f"ThreeRPR(base={self.base}, platform={self.platform}, limits={self._strokes()}{extra})"
+        )
+
+    def linkage_points(
+        self, lo: Array, hi: Array, angles: list[Interval]
+    ) -> dict[str, tuple[Interval, Interval]]:
+        """The base joints A_i (fixed) and the platform joints ``B_i = P + R(phi) b_i``
+        over the boxes of poses (the lengths are not needed)."""
+        n = lo.shape[0]
+        points, _ = platform_points(lo, hi, self.platform)
+        for i, a in enumerate(self.base):
+            points[f"A{i + 1}"] = fixed_point(a, n)
+        return points
+
+    def linkage_velocities(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        velocity: list[Interval],
+        rates: list[Interval],
+    ) -> dict[str, tuple[Interval, Interval]]:
+        """A_i still, each platform joint moving with the pose (``P' + phi' (-(R
+        b_i)_y, (R b_i)_x)``); the lengths' rates follow from it."""
+        n = lo.shape[0]
+        _, turned = platform_points(lo, hi, self.platform)
+        out = platform_velocities(turned, velocity)
+        still = fixed_point((0.0, 0.0), n)
+        for i in range(3):
+            out[f"A{i + 1}"] = still
+        return out

@@ -6,6 +6,23 @@ length ``l2_i`` to the platform point ``B_i = P + R(phi) b_i``. The pose is
 ``(x, y, phi)`` with ``phi`` periodic. The constraint of leg i is
 ``F_i = |B_i - C_i|^2 - l2_i^2``; its two branches (elbow on either side of
 ``A_i B_i``) give eight postures.
+
+The linkage (for ``[passive_limits]``, ``[[obstacles]]`` and ``[collisions]``,
+see :mod:`moveability.mechanisms.constraints`) names the base joints ``A1``..
+``A3``, the elbows ``C1``..``C3`` and the platform joints ``B1``..``B3``. Its
+links are each leg's proximal link ``A_i C_i`` and distal link ``C_i B_i`` and
+the platform's sides ``B1 B2``, ``B2 B3``, ``B3 B1``. The passive joints are
+
+``C_i``
+    the elbow angle: from the proximal link ``A_i -> C_i`` to the distal link
+    ``C_i -> B_i``;
+``B_i``
+    the platform joint angle: from the distal link ``C_i -> B_i`` to the
+    platform side ``B_i -> B_{i+1}`` (``B4`` is ``B1``).
+
+Branch 0 of a leg (``dF_i/dq_i > 0``) puts ``B_i`` on the right of the line
+``A_i C_i`` (``(C_i - A_i) x (B_i - A_i) = -dF_i/dq_i / 2 < 0``), branch 1 on
+the left: the sides :attr:`Linkage.ends` declares.
 """
 
 from __future__ import annotations
@@ -15,16 +32,21 @@ from typing import Any
 
 import numpy as np
 
+from .. import intervals as iv
 from ..errors import InvalidParameterError
+from ..intervals import Interval
 from ..limits import JointLimit
 from ..types import Array
 from .base import Mechanism, three_points
 from .constraint_leg import ConstraintLeg
+from .constraints import Linkage, fixed_point
 from .expressions import cos, sin
+from .platform import platform_points, platform_sides, platform_velocities
 
 __all__ = ["ThreeRRR"]
 
 _JOINTS = ("theta1", "theta2", "theta3")
+_THREE = ("1", "2", "3")
 
 
 def _leg(
@@ -117,6 +139,25 @@ class ThreeRRR(Mechanism):
     pose_names = ("x", "y", "phi")
     periodic_axes = (2,)
 
+    #: the links A_i C_i, C_i B_i and the platform's sides; passive angles at the
+    #: elbows C_i (from A_i C_i to C_i B_i) and the platform joints B_i (from
+    #: C_i B_i to B_i B_{i+1}); B_i on its branch's side of A_i C_i (see the module)
+    linkage = Linkage(
+        links=(
+            *((f"A{i}", f"C{i}") for i in _THREE),
+            *((f"C{i}", f"B{i}") for i in _THREE),
+            *platform_sides(),
+        ),
+        passive={
+            **{f"C{i}": ((f"A{i}", f"C{i}"), (f"C{i}", f"B{i}")) for i in _THREE},
+            **{
+                f"B{i}": ((f"C{i}", f"B{i}"), side)
+                for i, side in zip(_THREE, platform_sides(), strict=True)
+            },
+        },
+        ends=tuple((f"B{i}", (f"A{i}", f"C{i}"), int(i) - 1) for i in _THREE),
+    )
+
     def __init__(
         self,
         base: Sequence[Sequence[float]],
@@ -196,11 +237,50 @@ class ThreeRRR(Mechanism):
                 j: "unlimited" if lim.periodic else [lim.lo, lim.hi]
                 for j, lim in zip(_JOINTS, self.limits, strict=True)
             },
+            **self.restrictions.to_spec(),
         }
 
     def __repr__(self) -> str:
+        extra = "" if self.restrictions.empty else f", restrictions={self.restrictions}"
         return (
             f"ThreeRRR(base={[list(p) for p in self.base]}, "
             f"platform={[list(p) for p in self.platform]}, proximal={list(self.proximal)}, "
-            f"distal={list(self.distal)}, limits={self.limits})"
+            f"distal={list(self.distal)}, limits={self.limits}{extra})"
         )
+
+    def linkage_points(
+        self, lo: Array, hi: Array, angles: list[Interval]
+    ) -> dict[str, tuple[Interval, Interval]]:
+        """The base joints A_i (fixed), the elbows ``C_i = A_i + l1_i (cos q_i, sin q_i)``
+        over the joint enclosures, and the platform joints ``B_i = P + R(phi) b_i``
+        over the boxes of poses."""
+        n = lo.shape[0]
+        points, _ = platform_points(lo, hi, self.platform)
+        for i, (a, q) in enumerate(zip(self.base, angles, strict=True)):
+            points[f"A{i + 1}"] = fixed_point(a, n)
+            points[f"C{i + 1}"] = (
+                iv.cos(q) * self.proximal[i] + a[0],
+                iv.sin(q) * self.proximal[i] + a[1],
+            )
+        return points
+
+    def linkage_velocities(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        velocity: list[Interval],
+        rates: list[Interval],
+    ) -> dict[str, tuple[Interval, Interval]]:
+        """A_i still, each elbow turning with its joint about its base (``l1_i q_i'
+        (-sin q_i, cos q_i)``), each platform joint moving with the pose
+        (``P' + phi' (-(R b_i)_y, (R b_i)_x)``)."""
+        n = lo.shape[0]
+        _, turned = platform_points(lo, hi, self.platform)
+        out = platform_velocities(turned, velocity)
+        still = fixed_point((0.0, 0.0), n)
+        for i, (q, rate) in enumerate(zip(angles, rates, strict=True)):
+            speed = rate * self.proximal[i]
+            out[f"A{i + 1}"] = still
+            out[f"C{i + 1}"] = (-(iv.sin(q) * speed), iv.cos(q) * speed)
+        return out
