@@ -134,7 +134,7 @@ def test_no_upper_bound_without_flows():
     from moveability.analysis.flows import supports_flows
 
     example = Path(__file__).resolve().parents[2] / "examples" / "three-rrr.toml"
-    mechanism = load_spec(example)
+    mechanism = from_spec(load_spec(example))
     assert not supports_flows(mechanism)
     result = analyze(mechanism, precision=(1.0, 1.0, 0.4))
     assert result.open_nodes.any()
