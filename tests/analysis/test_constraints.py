@@ -392,3 +392,85 @@ def test_links_kept_apart_stay_apart_along_the_motion():
             path = start[None] + steps * limit * velocity[None]
             assert _apart(path[:, 0], path[:, 1], path[:, 2], path[:, 3]).all()
     assert kept_cases > 50
+
+
+def _box(values, widths, names="abcd"):
+    return {
+        name: (Interval(np.array([v[0] - w[0]]), np.array([v[0] + w[0]])),
+               Interval(np.array([v[1] - w[1]]), np.array([v[1] + w[1]])))
+        for name, v, w in zip(names, values, widths, strict=True)
+    }  # fmt: skip
+
+
+@pytest.mark.parametrize("turning", [False, True], ids=["straight", "turning"])
+def test_overlapping_links_nearly_along_one_line(turning):
+    """Links nearly along one line and overlapping (order d < a < c < b, where the
+    plain side tests all straddle): the codes agree with an exact test on
+    sampled configurations, and a motion said to keep them apart does, also
+    when one end turns about a centre at a joint's rate (:class:`Turning`)."""
+    from moveability.limits import STRADDLES
+    from moveability.mechanisms.constraints import (
+        ConstraintMargins,
+        Constraints,
+        Linkage,
+        Turning,
+    )
+
+    linkage = Linkage(links=(("a", "b"), ("c", "d")), passive={})
+    constraints = Constraints(collisions=True)
+    rng = np.random.default_rng(11)
+    seen = {INSIDE: 0, OUTSIDE: 0, STRADDLES: 0}
+    kept_cases = 0
+    for _ in range(1500):
+        angle = rng.uniform(-np.pi, np.pi)
+        u = np.array([np.cos(angle), np.sin(angle)])
+        n = np.array([-u[1], u[0]])
+        along = np.array([0.0, 8.0, 3.0, -5.0]) + rng.normal(0, 0.3, size=4)
+        across = rng.normal(0, 0.2, size=4)
+        centre = along[:, None] * u + across[:, None] * n + rng.uniform(-3, 3, size=2)
+        half = rng.uniform(0.002, 0.03, size=(4, 2))
+        margins = ConstraintMargins(constraints, linkage, _box(centre, half))
+        code = int(margins.codes[0])
+        seen[code] += 1
+        samples = centre + rng.uniform(-1, 1, size=(200, 4, 2)) * half
+        apart = _apart(samples[:, 0], samples[:, 1], samples[:, 2], samples[:, 3])
+        if code == INSIDE:
+            assert apart.all()
+        elif code == OUTSIDE:
+            assert not apart.any()
+        if code == INSIDE:
+            continue
+        speed = rng.normal(0, 1, size=(4, 2))
+        spread = rng.uniform(0, 0.2, size=(4, 2))
+        velocities = _box(speed, spread)
+        pivot = centre[2] + rng.normal(0, 1.0, size=2)  # c turns about it when turning
+        omega = (rng.normal(0, 1.0), rng.uniform(0, 0.2))
+        if turning:
+            lever = _box([centre[2] - pivot], [half[2]], names="c")["c"]
+            rate = Interval(np.array([omega[0] - omega[1]]), np.array([omega[0] + omega[1]]))
+            velocities["c"] = Turning(rate, lever)
+        if not margins.kept(velocities)[0]:
+            continue
+        kept_cases += 1
+        for _ in range(20):
+            start = centre + rng.uniform(-1, 1, size=(4, 2)) * half
+            if not _apart(*start[:, None, :])[0]:
+                continue
+            velocity = speed + rng.uniform(-1, 1, size=(4, 2)) * spread
+            w = omega[0] + rng.uniform(-1, 1) * omega[1]
+            path = [start]
+            for _ in range(400):
+                now = path[-1]
+                step = 0.0005
+                nxt = now + step * velocity
+                if turning:
+                    r = now[2] - pivot
+                    nxt[2] = now[2] + step * w * np.array([-r[1], r[0]])
+                if (np.abs(nxt - centre) > half).any():
+                    break
+                path.append(nxt)
+            p = np.array(path)
+            assert _apart(p[:, 0], p[:, 1], p[:, 2], p[:, 3]).all()
+    # every kind of answer occurs, and some motions are kept
+    assert seen[INSIDE] > 50 and seen[OUTSIDE] > 50 and seen[STRADDLES] > 50
+    assert kept_cases > 20

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from ..hypertree.status import BOUNDARY, IN, OUT
 from ..intervals import Interval
-from ..limits import INSIDE, OUTSIDE
+from ..limits import INSIDE, OUTSIDE, STRADDLES
 from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
 from ..types import Array
 
@@ -61,6 +61,10 @@ class SheetTable:
         Enclosure of det A over the node's configurations (NaN where unknown):
         a node whose det A is never positive holds no configuration of a region
         with det A > 0, and likewise for negative.
+        Where a constraint beyond the joint limits excludes every configuration
+        of one sign of det A (:meth:`Mechanism.constraint_signs`), the bound on
+        that side is 0: the enclosure then holds det A over the valid
+        configurations (and 0), which is what ``sign`` and :meth:`may_hold` read.
     angles_lo, angles_hi : (n, P, n_legs) float
         Enclosure (unwrapped) of each leg's joint angle over the sheet: its
         branch where the leg is regular, both branches where it may fold.
@@ -178,6 +182,17 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
             lim_out |= beyond == OUTSIDE
         with np.errstate(invalid="ignore"):
             det = mechanism.det_a_boxes(lo, hi, angles, posture=p)
+            # a sign of det A whose every configuration violates a constraint
+            signs = None
+            if beyond is not None and (beyond == STRADDLES).any():
+                signs = mechanism.constraint_signs(lo, hi, angles, p, leg_status == REGULAR)
+        if signs is not None:
+            no_plus, no_minus = signs
+            lim_out |= no_plus & no_minus
+            det = Interval(
+                np.where(no_minus, np.maximum(det.lo, 0.0), det.lo),
+                np.where(no_plus, np.minimum(det.hi, 0.0), det.hi),
+            )
         det_lo[:, p], det_hi[:, p] = det.lo, det.hi
         positive = det.lo > 0
         negative = det.hi < 0

@@ -229,6 +229,25 @@ class Mechanism:
         margins = self.constraint_margins(lo, hi, angles, posture, regular)
         return None if margins is None else margins.codes
 
+    def constraint_signs(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        posture: int,
+        regular: NDArray[np.bool_],
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]] | None:
+        """Over each box: whether no configuration with det A > 0, and whether no
+        configuration with det A < 0, satisfies the constraints (see
+        :meth:`ConstraintMargins.excluded`); None when nothing beyond the sheets'
+        own codes can be said (no constraints, or no side fixed by det A)."""
+        if self.restrictions.empty or self.linkage is None or not self.linkage.det_sides:
+            return None
+        margins = self.constraint_margins(lo, hi, angles, posture, regular)
+        if margins is None:
+            return None
+        return margins.excluded(1), margins.excluded(-1)
+
     def constraint_margins(
         self,
         lo: Array,

@@ -48,6 +48,7 @@ may be active):
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -58,13 +59,16 @@ from numpy.typing import NDArray
 from .. import intervals as iv
 from ..intervals import Interval
 from ..limits import INSIDE, OUTSIDE, STRADDLES, JointLimit
+from ..types import Array
 
 __all__ = [
     "ConstraintMargins",
     "Constraints",
     "Linkage",
     "Obstacle",
+    "Turning",
     "constraint_codes",
+    "cross_velocity",
     "fixed_point",
     "segment_codes",
     "vector_angle",
@@ -72,6 +76,41 @@ __all__ = [
 
 #: a point of the linkage over n boxes: (x, y) enclosures
 Point = tuple[Interval, Interval]
+
+
+class Turning(tuple):
+    """The velocity of a point turning about a centre, ``omega J r`` (``J`` the
+    quarter turn, ``r`` the point less the centre): a :data:`Point` of
+    enclosures that also keeps its factors, so that a cross product with it
+    is ``omega (J r) x w = -omega (r . w)``. The joint's rate ``omega`` may be
+    unbounded (a leg that may fold); the product then keeps its sign, which
+    the components, each unbounded, would lose.
+
+    Examples
+    --------
+    >>> v = Turning(Interval(np.array([1.0]), np.array([np.inf])),
+    ...             (Interval(np.array([1.0])), Interval(np.array([0.0]))))
+    >>> w = (Interval(np.array([2.0])), Interval(np.array([0.5])))
+    >>> x = cross_velocity(v, w)   # -(omega) (r . w) = -2 omega
+    >>> float(x.lo[0]), float(x.hi[0])
+    (-inf, -2.0)
+    """
+
+    omega: Interval
+    lever: Point
+
+    def __new__(cls, omega: Interval, lever: Point) -> Turning:
+        out = super().__new__(cls, (-(lever[1] * omega), lever[0] * omega))
+        out.omega = omega
+        out.lever = lever
+        return out
+
+
+def cross_velocity(v: Point, w: Point) -> Interval:
+    """``v x w`` for a velocity v, factored when v is a :class:`Turning`."""
+    if isinstance(v, Turning):
+        return -(v.omega * (v.lever[0] * w[0] + v.lever[1] * w[1]))
+    return _cross(v, w)
 
 
 @dataclass(frozen=True)
@@ -264,6 +303,22 @@ def constraint_codes(
     return ConstraintMargins(constraints, linkage, points).codes
 
 
+#: one way to keep two overlapping links apart: sides (point, line, +-1 per box)
+#: that must all keep their sign, and the boxes where it applies
+_Option = tuple[list[tuple[str, tuple[str, str], Any]], Any]
+
+
+@dataclass(frozen=True)
+class _Overlap:
+    """What :meth:`ConstraintMargins._overlap` finds for a pair of links: the codes
+    it decides (``STRADDLES`` elsewhere), where it leaves them open but knows
+    the one side that keeps them apart, and those sides (point, line, +-1, where)."""
+
+    codes: NDArray[np.uint8]
+    covered: NDArray[np.bool_]
+    sides: list[_Option]
+
+
 #: a distance that must stay positive: the end point (a point's name, or an
 #: obstacle's fixed centre) and the segment's two points' names, and where it
 #: may be active
@@ -342,6 +397,9 @@ class ConstraintMargins:
         #: links that may not cross, where they may touch, and where they are
         #: apart at every configuration off a fold (see :meth:`_across_fold`)
         self._pairs: list[tuple[tuple[str, str], tuple[str, str], Any, Any]] = []
+        #: per pair: where the links may touch overlapping along one line, the side
+        #: of a point of one link's line that keeps them apart (see :meth:`_overlap`)
+        self._overlaps: list[list[_Option]] = []
         for name, limit in constraints.passive.items():
             first_link, second_link = linkage.passive[name]
             first = vector_angle(*_minus(points[first_link[1]], points[first_link[0]]))
@@ -364,20 +422,28 @@ class ConstraintMargins:
                     if {a, b} & {c, d}:
                         continue  # links sharing a joint
                     one, other = (a, b), (c, d)
-                    active = meet(self._pair_code(one, other))
+                    code = self._pair_code(one, other)
+                    overlap = self._overlap(one, other, code == STRADDLES)
+                    code = np.where(overlap.codes != STRADDLES, overlap.codes, code)
+                    active = meet(code.astype(np.uint8))
                     fold_apart, fold_cross = self._across_fold(one, other)
                     fails |= fold_cross
-                    self._pairs.append((one, other, active & ~fold_cross, fold_apart))
+                    active &= ~fold_cross
+                    keep = active & ~fold_apart
+                    self._overlaps.append([(terms, keep & m) for terms, m in overlap.sides])
+                    self._pairs.append((one, other, active, fold_apart))
             fails |= _pinched(linkage, points)
         self.codes = np.where(fails, OUTSIDE, np.where(holds, INSIDE, STRADDLES)).astype(np.uint8)
 
     def rates(
-        self, velocities: Mapping[str, Point]
+        self, velocities: Mapping[str, Point], pairs: bool = True
     ) -> list[tuple[NDArray[np.bool_], NDArray[np.bool_], Interval]]:
         """For each constraint that may be active in some box: where it may be
         active at a lower bound (it is kept when its rate is at least 0), at an
         upper bound (kept when at most 0), and an enclosure of its rate when the
-        named points move at ``velocities`` (enclosures, per point)."""
+        named points move at ``velocities`` (enclosures, per point). With
+        ``pairs``, also the sides that keep overlapping links apart where they
+        may touch (:meth:`_overlap`): one way among others to keep them apart."""
         out = []
         pts = self._points
         for (a, b), (c, d), rise, fall in self._angles:
@@ -399,7 +465,29 @@ class ConstraintMargins:
             )
             rate = (q[0] * move[0] + q[1] * move[1]) * 2.0
             out.append((near, np.zeros(near.shape[0], dtype=bool), rate))
+        for options in self._overlaps if pairs else ():
+            for terms, mask in options:
+                if not mask.any():
+                    continue
+                for point, line, sign in terms:
+                    rate = self._side_rate(point, line, velocities)
+                    out.append((mask & (sign > 0), mask & (sign < 0), rate))
         return out
+
+    def _side_rate(
+        self, point: str, line: tuple[str, str], velocities: Mapping[str, Point]
+    ) -> Interval:
+        """The rate of ``(l1 - l0) x (point - l0)`` when the named points move at
+        ``velocities``."""
+        pts = self._points
+        l0, l1 = line
+        # (v1 - v0) x (p - l0) + (l1 - l0) x (vp - v0), one term per velocity
+        # (a turning point's unbounded rate then appears once)
+        return (
+            cross_velocity(velocities[l1], _minus(pts[point], pts[l0]))
+            + cross_velocity(velocities[l0], _minus(pts[l1], pts[point]))
+            + cross_velocity(velocities[point], _minus(pts[l0], pts[l1]))
+        )
 
     def _closest(self, index: int) -> tuple[NDArray[np.bool_], Interval, Point]:
         """Distance ``index``: where it may be active, and the parameter and
@@ -428,16 +516,52 @@ class ConstraintMargins:
         n = self.codes.shape[0]
         ok = np.ones(n, dtype=bool)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            for rise, fall, rate in self.rates(velocities):
+            for rise, fall, rate in self.rates(velocities, pairs=False):
                 ok &= (~rise | (rate.lo >= 0)) & (~fall | (rate.hi <= 0))
-            for first, second, active, fold_apart in self._pairs:
+            for (first, second, active, fold_apart), options in zip(
+                self._pairs, self._overlaps, strict=True
+            ):
                 if not active.any():
                     continue
                 if det_sign and self._det_known:
                     decided = self._pair_code(first, second, det_sign) != STRADDLES
+                    overlap = self._overlap(
+                        first, second, active & ~decided, det_sign, off_fold=True
+                    )
+                    decided |= overlap.codes != STRADDLES
                     active = active & ~decided
-                ok &= ~active | fold_apart | self._apart_kept(first, second, velocities)
+                    options = [(terms, m & active) for terms, m in overlap.sides]
+                # any one of these keeps the pair apart
+                apart = fold_apart | self._apart_kept(first, second, velocities)
+                for terms, mask in options:
+                    if not mask.any():
+                        continue
+                    holds = mask.copy()
+                    for point, line, sign in terms:
+                        rate = self._side_rate(point, line, velocities)
+                        holds &= np.where(sign > 0, rate.lo >= 0, rate.hi <= 0)
+                    apart |= holds
+                ok &= ~active | apart
         return ok
+
+    def excluded(self, det_sign: int) -> NDArray[np.bool_]:
+        """Boxes where no configuration with det A of sign ``det_sign`` (+-1)
+        satisfies the constraints: one is certainly violated, or two links
+        certainly cross once the sides that sign fixes are known
+        (:attr:`Linkage.det_sides`)."""
+        out = np.asarray(self.codes == OUTSIDE, dtype=bool)
+        if not self._det_known:
+            return out
+        with np.errstate(invalid="ignore", over="ignore"):
+            for first, second, active, _ in self._pairs:
+                open_ = active & ~out
+                if not open_.any():
+                    continue
+                code = self._pair_code(first, second, det_sign)
+                out |= open_ & (code == OUTSIDE)
+                overlap = self._overlap(first, second, open_ & (code == STRADDLES), det_sign)
+                out |= open_ & (overlap.codes == OUTSIDE)
+        return out
 
     def _pair_code(
         self, first: tuple[str, str], second: tuple[str, str], det_sign: int = 0
@@ -450,16 +574,21 @@ class ConstraintMargins:
             self._side(first[1], second, det_sign),
         )
 
-    def _side(self, point: str, link: tuple[str, str], det_sign: int = 0) -> Interval:
+    def _side(
+        self, point: str, link: tuple[str, str], det_sign: int = 0, off_fold: bool = False
+    ) -> Interval:
         """``(l1 - l0) x (point - l0)`` over the boxes; a side known from the
         posture (:attr:`Linkage.ends`) replaces it by +-1 where the leg does not
-        fold, and one known from the sign of det A (:attr:`Linkage.det_sides`)
+        fold (everywhere with ``off_fold``: for the configurations off the fold
+        alone), and one known from the sign of det A (:attr:`Linkage.det_sides`)
         everywhere, when ``det_sign`` (+-1) is given."""
         pts = self._points
         out = _cross(_minus(pts[link[1]], pts[link[0]]), _minus(pts[point], pts[link[0]]))
         for key, flip in (((point, link), 1), ((point, link[::-1]), -1)):
             if key in self._known:
                 side, folds = self._known[key]
+                if off_fold:
+                    folds = np.zeros_like(folds)
                 out = Interval(
                     np.where(folds, out.lo, flip * side), np.where(folds, out.hi, flip * side)
                 )
@@ -467,6 +596,118 @@ class ConstraintMargins:
                 fixed = float(flip * self._det_known[key] * det_sign)
                 out = Interval(np.full(self._shape, fixed))
         return out
+
+    def _overlap(
+        self,
+        first: tuple[str, str],
+        second: tuple[str, str],
+        where: NDArray[np.bool_],
+        det_sign: int = 0,
+        off_fold: bool = False,
+    ) -> _Overlap:
+        """Two links nearly along one line, overlapping: whether they are apart
+        comes down to the sides of their end points.
+
+        Let e1 be an end of the first link (f1 its other end) and e2 one of the
+        second (f2 its other end), and u a direction along which both links
+        point the same way, ordered ``f2 < e1 < e2 < f1``. Over that order each
+        link's line is the graph of an affine function of the abscissa along u
+        (l1, l2), and the links share the abscissae between e1 and e2: they are
+        apart exactly where ``delta = l1 - l2`` has one strict sign at e1 and at
+        e2. The sign of delta at each of the four points is a side:
+        ``delta(e1) ~ side(e1, f2 e2)``, ``delta(e2) ~ -side(e2, e1 f1)``,
+        ``delta(f1) ~ side(f1, f2 e2)``, ``delta(f2) ~ -side(f2, e1 f1)``
+        (:meth:`_side`, with the sides the posture and ``det_sign`` fix). Since
+        delta is affine, delta(e2) lies strictly between delta(e1) and delta(f1),
+        and delta(e1) between delta(f2) and delta(e2): where delta(e2) and
+        delta(f1) have opposite signs, delta(e1) has delta(e2)'s (apart), and
+        likewise at the other end. Where one of delta(e1), delta(e2) has a certain
+        sign and nothing else decides, the constraint is that the other has that
+        sign: kept along a motion by that side's rate (:meth:`rates`).
+
+        Only boxes of ``where`` are considered; u is the midpoint of the
+        enclosure of ``f1 - e1``. With ``off_fold`` the sides a branch fixes are
+        taken as known where the leg may fold too: the answers then hold for
+        the configurations off the fold, which is what a flow that keeps them
+        off it needs (a configuration on the fold whose known side is 0 touches
+        the other link in a strict sign test, so it is never one that starts
+        apart; the two convexity tests hold with that side 0 as well).
+        """
+        pts = self._points
+        codes = np.full(self._shape, STRADDLES, dtype=np.uint8)
+        covered = np.zeros(self._shape, dtype=bool)
+        sides: list[_Option] = []
+        todo = where.copy()
+
+        def positive(x: Interval) -> NDArray[np.bool_]:
+            return np.asarray(x.lo > 0, dtype=bool)
+
+        def negative(x: Interval) -> NDArray[np.bool_]:
+            return np.asarray(x.hi < 0, dtype=bool)
+
+        with np.errstate(invalid="ignore", over="ignore"):
+            for (e1, f1), (e2, f2) in itertools.product(
+                (first, first[::-1]), (second, second[::-1])
+            ):
+                if not todo.any():
+                    break
+                w = _minus(pts[f1], pts[e1])
+                u = (np.nan_to_num(w[0].mid), np.nan_to_num(w[1].mid))
+
+                def along(p: Point, u: tuple[Array, Array] = u) -> Interval:
+                    return p[0] * u[0] + p[1] * u[1]
+
+                ordered = todo.copy()
+                for v in (
+                    _minus(pts[e1], pts[f2]),
+                    _minus(pts[e2], pts[e1]),
+                    _minus(pts[f1], pts[e2]),
+                ):
+                    ordered &= along(v).lo > 0
+                if not ordered.any():
+                    continue
+                at_e1 = self._side(e1, (f2, e2), det_sign, off_fold)
+                at_e2 = -self._side(e2, (e1, f1), det_sign, off_fold)
+                at_f1 = self._side(f1, (f2, e2), det_sign, off_fold)
+                at_f2 = -self._side(f2, (e1, f1), det_sign, off_fold)
+                apart = (
+                    (positive(at_e1) & positive(at_e2))
+                    | (negative(at_e1) & negative(at_e2))
+                    | (positive(at_e2) & negative(at_f1))
+                    | (negative(at_e2) & positive(at_f1))
+                    | (positive(at_e1) & negative(at_f2))
+                    | (negative(at_e1) & positive(at_f2))
+                    | (positive(at_f2) & positive(at_f1))
+                    | (negative(at_f2) & negative(at_f1))
+                )
+                meet = ((at_e1.lo >= 0) & (at_e2.hi <= 0)) | ((at_e1.hi <= 0) & (at_e2.lo >= 0))
+                codes[ordered & apart] = INSIDE
+                codes[ordered & ~apart & meet] = OUTSIDE
+                left = ordered & ~apart & ~meet
+                # one end's sign known: the other end's side must match it
+                for known, point, line, flip in (
+                    (at_e2, e1, (f2, e2), 1),
+                    (at_e1, e2, (e1, f1), -1),
+                ):
+                    sure = left & (positive(known) | negative(known))
+                    if sure.any():
+                        sign = flip * np.where(positive(known), 1, -1)
+                        covered |= sure
+                        sides.append(([(point, line, sign)], sure))
+                        left &= ~sure
+                # the outer ends' signs known and opposite: delta vanishes once
+                # between them, and the links are apart while that root stays
+                # off [e1, e2]: delta(e1) keeps delta(f1)'s sign, or delta(e2)
+                # keeps delta(f2)'s (both kept, as either case may hold)
+                sure = left & (
+                    (positive(at_f2) & negative(at_f1)) | (negative(at_f2) & positive(at_f1))
+                )
+                if sure.any():
+                    up = np.where(positive(at_f1), 1, -1)
+                    covered |= sure
+                    sides.append(([(e1, (f2, e2), up), (e2, (e1, f1), up)], sure))
+                todo &= ~ordered
+        return _Overlap(codes, covered, sides)
 
     def _across_fold(
         self, first: tuple[str, str], second: tuple[str, str]

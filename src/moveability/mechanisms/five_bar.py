@@ -16,7 +16,7 @@ from ..intervals import Interval
 from ..limits import JointLimit
 from ..types import Array
 from .base import Mechanism
-from .constraints import Linkage, fixed_point
+from .constraints import Linkage, Turning, fixed_point
 from .rr_leg import RRLeg
 
 __all__ = ["FiveBar"]
@@ -143,13 +143,13 @@ class FiveBar(Mechanism):
         rates: list[Interval],
     ) -> dict[str, tuple[Interval, Interval]]:
         """A and B still, each elbow turning with its joint about its base (``L
-        theta' (-sin theta, cos theta)``), P at the pose's velocity."""
+        theta' (-sin theta, cos theta)``, kept as a :class:`Turning`: the joint's
+        rate is unbounded where the leg may fold), P at the pose's velocity."""
         n = lo.shape[0]
         still = fixed_point((0.0, 0.0), n)
         out = {"A": still, "B": still, "P": (velocity[0], velocity[1])}
         for name, leg, a, rate in zip(("C", "D"), self.rr_legs, angles, rates, strict=True):
-            speed = rate * leg.proximal
-            out[name] = (-(iv.sin(a) * speed), iv.cos(a) * speed)
+            out[name] = Turning(rate, (iv.cos(a) * leg.proximal, iv.sin(a) * leg.proximal))
         return out
 
     def _crossings(self) -> list[Interval]:
