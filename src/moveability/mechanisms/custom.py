@@ -32,10 +32,27 @@ coordinates that wrap around; their bounds must span one turn, 2 pi),
 (finite numbers), ``[[legs]]`` each with ``joint``, ``constraint``, optional
 ``kind`` (``"revolute"``, the default, or ``"prismatic"``) and optional
 ``branches`` (expressions of the pose giving the joint's values, used at
-points only and checked there), ``[limits]`` per joint (``[lo, hi]``,
+points only and checked there) and optional ``passive`` (a table of passive
+angles, below), ``[limits]`` per joint (``[lo, hi]``,
 radians for a revolute joint, with ``"pi"`` expressions; or
 ``"unlimited"`` for a revolute joint), ``[bounds]`` per pose coordinate
 (``[lo, hi]``, numbers or ``"pi"`` expressions).
+
+Passive joint limits: a leg may declare passive angles (names unique across
+the legs), each an expression of the pose, the leg's own joint and the
+parameters, with limits ``[lo, hi]`` (radians, at most one turn wide)::
+
+    [legs.passive]
+    C = { angle = "atan2(y - L1*sin(t1), x - L1*cos(t1)) - t1", limits = [-1.0, 2.2] }
+
+The angle is wrapped to ``(-pi, pi]``, i.e. compared with the limits modulo
+2 pi (:class:`~moveability.limits.JointLimit`), as the built-in mechanisms'
+``[passive_limits]``. Over a box of poses and the leg's joint enclosure it is
+enclosed by interval arithmetic (an ``atan2`` whose turn does not matter
+without its cut, see :func:`modular`) and classified INSIDE, OUTSIDE or
+STRADDLES (:meth:`CustomMechanism.constraint_codes`); the sheets count a
+configuration valid only within them. The legs give no flows, so no rate of
+the angles is needed (nor given).
 
 Expressions may use the pose, joint and parameter names, numbers, ``pi``,
 ``+ - * / **`` and the functions ``sin cos tan sqrt exp log atan2 abs``.
@@ -56,23 +73,32 @@ import ast
 import keyword
 import math
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
 import numpy as np
 import sympy
+from numpy.typing import NDArray
 
 from .. import intervals as iv
 from ..errors import Plain, SpecError
 from ..intervals import Interval
-from ..limits import JointLimit
+from ..limits import INSIDE, OUTSIDE, STRADDLES, JointLimit
 from ..spec import parse_angle
 from ..types import Array
 from . import expressions as ex
 from .base import Mechanism
 from .constraint_leg import ConstraintLeg
+from .constraints import ConstraintMargins, Constraints
 
-__all__ = ["CustomMechanism", "compile_expression", "normalise_custom_spec"]
+__all__ = [
+    "CustomMechanism",
+    "PassiveAngle",
+    "compile_expression",
+    "modular",
+    "normalise_custom_spec",
+]
 
 _KEYS = (
     "mechanism",
@@ -84,7 +110,8 @@ _KEYS = (
     "limits",
     "bounds",
 )
-_LEG_KEYS = ("joint", "constraint", "kind", "branches")
+_LEG_KEYS = ("joint", "constraint", "kind", "branches", "passive")
+_PASSIVE_KEYS = ("angle", "limits")
 _KINDS = ("revolute", "prismatic")
 _FUNCTIONS = {
     "sin": sympy.sin,
@@ -100,6 +127,8 @@ _ARITY = {"atan2": 2}
 _RESERVED = {*_FUNCTIONS, "pi", "E", "I"}
 _TWO_PI_LO = math.nextafter(2 * math.pi, 0.0)
 _TWO_PI_HI = math.nextafter(2 * math.pi, math.inf)
+#: atan2 whose value counts modulo 2 pi only (see :func:`modular`)
+_ATAN2_TURN = sympy.Function("atan2_turn")
 _EXPRESSION_ALLOWED = (
     "an expression of the declared names, numbers, pi, + - * / ** and "
     + ", ".join(sorted(_FUNCTIONS))
@@ -219,6 +248,8 @@ class _Printer:
         }
         if isinstance(e, sympy.Function) and e.func in names:
             return f"{names[e.func]}(" + ", ".join(self(a) for a in e.args) + ")"
+        if isinstance(e, sympy.Function) and e.func == _ATAN2_TURN:
+            return "atan2_turn(" + ", ".join(self(a) for a in e.args) + ")"
         if isinstance(e, sympy.sign):
             # derivative of abs: d|u| = sign(u) du, undefined at 0 (guarded over intervals)
             return f"sign({self(e.args[0])})"
@@ -239,7 +270,13 @@ def _rational_float(p: int, q: int) -> float:
 
 
 _PI_IV = Interval(np.float64(np.pi), np.nextafter(np.pi, np.inf))
-_COMMON = {**ex.FUNCTIONS, "absolute": ex.absolute, "power": ex.power, "sign": _sign}
+_COMMON = {
+    **ex.FUNCTIONS,
+    "absolute": ex.absolute,
+    "power": ex.power,
+    "sign": _sign,
+    "atan2_turn": ex.atan2_turn,
+}
 _FLOAT_NS = {**_COMMON, "PI": float(np.pi), "rational": _rational_float}
 _INTERVAL_NS = {**_COMMON, "PI": _PI_IV, "rational": iv.rational}
 
@@ -279,6 +316,50 @@ def compile_expression(
 
     g.__doc__ = f"{key}: {expr}"
     return g
+
+
+def modular(expr: sympy.Expr) -> sympy.Expr:
+    """``expr`` with each ``atan2`` whose value counts modulo 2 pi only marked so.
+
+    A passive angle is compared with its limits modulo 2 pi, so an ``atan2``
+    in it may be enclosed up to whole turns (without the cut on the negative
+    x axis: :func:`~moveability.mechanisms.expressions.atan2_turn`) where a
+    turn more or less changes the angle by whole turns only: at the top of the
+    expression, in the terms of a sum there, in ``n * u`` with ``n`` an
+    integer there, and in the argument of ``sin``, ``cos``, ``tan`` anywhere.
+    Elsewhere (``atan2(..)/2``, ``atan2(..)**2``, ``exp(atan2(..))``) it is
+    left as it is, the guarded ``atan2`` (the whole line over a box meeting
+    its cut).
+
+    Examples
+    --------
+    >>> x, y, t = sympy.symbols("x y t", real=True)
+    >>> modular(sympy.atan2(y, x) - t)
+    -t + atan2_turn(y, x)
+    >>> modular(sympy.atan2(y, x) / 2)
+    atan2(y, x)/2
+    >>> modular(sympy.exp(sympy.cos(2 * sympy.atan2(y, x))))
+    exp(cos(2*atan2_turn(y, x)))
+    """
+
+    def walk(e: sympy.Basic, mod: bool) -> sympy.Basic:
+        if not e.args:
+            return e
+        if isinstance(e, sympy.atan2):
+            y, x = (walk(a, False) for a in e.args)
+            return _ATAN2_TURN(y, x) if mod else sympy.atan2(y, x, evaluate=False)
+        if isinstance(e, sympy.sin | sympy.cos | sympy.tan):
+            return e.func(walk(e.args[0], True), evaluate=False)
+        if mod and isinstance(e, sympy.Add):
+            return sympy.Add(*(walk(a, True) for a in e.args), evaluate=False)
+        if mod and isinstance(e, sympy.Mul):
+            coeff, rest = e.as_coeff_Mul()
+            if coeff.is_Integer and not isinstance(rest, sympy.Mul):
+                return sympy.Mul(coeff, walk(rest, True), evaluate=False)
+        return e.func(*(walk(a, False) for a in e.args), evaluate=False)
+
+    out: sympy.Expr = walk(expr, True)
+    return out
 
 
 # ---------------------------------------------------------------- the spec
@@ -325,6 +406,46 @@ def _pair(value: object, key: str, angle: bool) -> list[float]:
     return [lo, hi]
 
 
+def _passive(
+    value: object,
+    key: str,
+    joint: str,
+    symbols: Mapping[str, sympy.Symbol],
+    joints: Sequence[str],
+    taken: set[str],
+) -> dict[str, dict[str, Any]]:
+    """A leg's passive angles ``{name: {"angle": text, "limits": [lo, hi]}}``,
+    checked (``taken``: the names of the legs before, updated)."""
+    table = _table(
+        value, key, "a table of passive angles: name = { angle = ..., limits = [lo, hi] }"
+    )
+    out: dict[str, dict[str, Any]] = {}
+    for name, item in table.items():
+        pkey = f"{key}.{name}"
+        if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
+            raise SpecError(pkey, "a name (an identifier)", name)
+        if name in taken:
+            raise SpecError(pkey, "a passive angle name not used before", Plain(name))
+        item = _table(item, pkey, "a table { angle = expression, limits = [lo, hi] }")
+        for k in item:
+            if k not in _PASSIVE_KEYS:
+                raise SpecError(f"{pkey}.{k}", "one of " + ", ".join(_PASSIVE_KEYS), Plain(str(k)))
+        text = item.get("angle")
+        if text is None:
+            raise SpecError(f"{pkey}.angle", _EXPRESSION_ALLOWED, Plain("nothing"))
+        expr = _parse(text, f"{pkey}.angle", symbols)
+        if any(s.name in joints and s.name != joint for s in expr.free_symbols):
+            raise SpecError(f"{pkey}.angle", f"an expression of the pose and {joint} only", text)
+        if "limits" not in item:
+            raise SpecError(f"{pkey}.limits", "[lo, hi] in radians", Plain("nothing"))
+        limits = _pair(item["limits"], f"{pkey}.limits", angle=True)
+        if limits[1] - limits[0] > _TWO_PI_HI:
+            raise SpecError(f"{pkey}.limits", "a range no wider than 2*pi", item["limits"])
+        taken.add(name)
+        out[name] = {"angle": str(text).strip(), "limits": limits}
+    return out
+
+
 def normalise_custom_spec(data: Mapping[str, Any]) -> dict[str, Any]:
     """Check a custom mechanism's spec and return it normalised (JSON-ready, stable).
 
@@ -338,7 +459,8 @@ def normalise_custom_spec(data: Mapping[str, Any]) -> dict[str, Any]:
     dict
         ``{"mechanism": "custom", "pose": [...], "periodic": [...], "joints":
         [...], "parameters": {name: float}, "legs": [{"joint", "constraint",
-        "kind", "branches"?}], "limits": {joint: [lo, hi] or "unlimited"},
+        "kind", "branches"?, "passive"?: {name: {"angle", "limits": [lo, hi]}}}],
+        "limits": {joint: [lo, hi] or "unlimited"},
         "bounds": {pose: [lo, hi]}}``, legs in the order of ``joints``.
 
     Raises
@@ -347,7 +469,10 @@ def normalise_custom_spec(data: Mapping[str, Any]) -> dict[str, Any]:
         Naming the key at fault: ``legs[1].constraint`` for a malformed
         expression or an unknown symbol (named), a leg whose constraint does
         not involve its joint, a joint without leg or without limit, duplicated
-        names, bounds with ``lo >= hi``, non-finite numbers, unknown keys.
+        names, bounds with ``lo >= hi``, non-finite numbers, unknown keys;
+        ``legs[0].passive.C.angle`` (as a constraint, of the pose and the leg's
+        joint only) or ``.limits``, a passive angle name used twice, a
+        top-level ``passive_limits``.
 
     Examples
     --------
@@ -370,6 +495,10 @@ got unknown symbol 'z' in legs[0].constraint
     if not isinstance(data, Mapping):
         raise SpecError("spec", "a mapping", data)
     for key in data:
+        if key == "passive_limits":
+            raise SpecError(
+                key, "passive angles declared per leg ([legs.passive])", Plain("a table")
+            )
         if key not in _KEYS:
             raise SpecError(str(key), "one of the keys " + ", ".join(_KEYS), Plain(str(key)))
     if data.get("mechanism", "custom") != "custom":
@@ -400,6 +529,7 @@ got unknown symbol 'z' in legs[0].constraint
     if isinstance(legs_raw, str) or not isinstance(legs_raw, Sequence) or not legs_raw:
         raise SpecError("legs", "a list of legs ([[legs]] tables)", legs_raw)
     by_joint: dict[str, dict[str, Any]] = {}
+    passive_names: set[str] = set()
     for i, leg in enumerate(legs_raw):
         key = f"legs[{i}]"
         leg = _table(leg, key, "a table with joint and constraint")
@@ -432,6 +562,12 @@ got unknown symbol 'z' in legs[0].constraint
             for b, branch in enumerate(branches):
                 _parse(branch, f"{key}.branches[{b}]", pose_syms)
             entry["branches"] = [str(b).strip() for b in branches]
+        if "passive" in leg:
+            passive = _passive(
+                leg["passive"], f"{key}.passive", joint, symbols, joints, passive_names
+            )
+            if passive:
+                entry["passive"] = passive
         by_joint[joint] = entry
     for joint in joints:
         if joint not in by_joint:
@@ -484,6 +620,17 @@ got unknown symbol 'z' in legs[0].constraint
     }
 
 
+@dataclass(frozen=True)
+class PassiveAngle:
+    """A passive angle of a leg: ``function(*pose, q_leg)`` (floats or intervals,
+    parameters bound), to keep within ``limit`` modulo 2 pi."""
+
+    name: str
+    leg: int
+    function: Callable[..., Any]
+    limit: JointLimit
+
+
 class CustomMechanism(Mechanism):
     """A mechanism from a custom spec (see :func:`normalise_custom_spec`).
 
@@ -525,6 +672,7 @@ class CustomMechanism(Mechanism):
         symbols = {sym.name: sym for sym in (*pose_syms, *param_syms)}
         legs = []
         limits = []
+        passive: list[PassiveAngle] = []
         for i, leg in enumerate(s["legs"]):
             q = sympy.Symbol(leg["joint"], real=True)
             key = f"legs[{i}].constraint"
@@ -576,6 +724,14 @@ class CustomMechanism(Mechanism):
                     closed_form=closed,
                 )
             )
+            for name, item in leg.get("passive", {}).items():
+                akey = f"legs[{i}].passive.{name}.angle"
+                angle = modular(_parse(item["angle"], akey, {**symbols, q.name: q}))
+                lo, hi = item["limits"]
+                passive.append(PassiveAngle(name, i, bind(angle, akey), JointLimit(lo, hi)))
+        self.passive_angles = tuple(passive)
+        if passive:
+            self.restrictions = Constraints(passive={a.name: a.limit for a in passive})
         self.legs = tuple(legs)
         self.limits = tuple(limits)
         self.bounds = (
@@ -597,6 +753,67 @@ class CustomMechanism(Mechanism):
         """The normalised spec (JSON-ready)."""
         return normalise_custom_spec(self.spec)
 
+    def constraint_codes(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        posture: int | None = None,
+        regular: NDArray[np.bool_] | None = None,
+    ) -> NDArray[np.uint8] | None:
+        """Whether every configuration over each box keeps every passive angle
+        within its limits (``INSIDE``), one certainly leaves them (``OUTSIDE``),
+        or it cannot tell; None without passive limits.
+
+        Each angle is enclosed over the box of poses and its leg's joint
+        enclosure ``angles[leg]`` (which holds the posture's configurations),
+        then classified modulo 2 pi (:meth:`JointLimit.classify`). A
+        non-finite enclosure (an expression undefined or discontinuous over
+        the box) cannot tell. ``posture`` and ``regular`` are not needed.
+        """
+        chosen = self.restrictions.passive
+        if not self.passive_angles or not chosen:
+            return None
+        n = lo.shape[0]
+        pose = [Interval(lo[:, j], hi[:, j]) for j in range(lo.shape[1])]
+        holds = np.ones(n, dtype=bool)
+        fails = np.zeros(n, dtype=bool)
+        for angle in self.passive_angles:
+            if angle.name not in chosen:
+                continue
+            with np.errstate(all="ignore"):
+                value = iv.as_interval(angle.function(*pose, angles[angle.leg]))
+                a_lo = np.broadcast_to(value.lo, (n,))
+                a_hi = np.broadcast_to(value.hi, (n,))
+                known = np.isfinite(a_lo) & np.isfinite(a_hi)
+                codes = chosen[angle.name].classify(
+                    Interval(np.where(known, a_lo, -np.inf), np.where(known, a_hi, np.inf))
+                )
+            codes = np.where(known, codes, STRADDLES)
+            holds &= codes == INSIDE
+            fails |= codes == OUTSIDE
+        return np.where(fails, OUTSIDE, np.where(holds, INSIDE, STRADDLES)).astype(np.uint8)
+
+    def constraint_margins(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        posture: int | None = None,
+        regular: NDArray[np.bool_] | None = None,
+    ) -> ConstraintMargins | None:
+        """The rates of the passive angles along motions are not known (the legs give
+        no flows, :func:`moveability.analysis.flows.supports_flows`): refused
+        rather than answered as if there were no constraint."""
+        if self.passive_angles and self.restrictions.passive:
+            raise NotImplementedError("no rates for the passive angles of a custom mechanism")
+        return None
+
     def __repr__(self) -> str:
         legs = "; ".join(f"{leg['joint']}: {leg['constraint']} = 0" for leg in self.spec["legs"])
-        return f"CustomMechanism(pose={list(self.pose_names)}, {legs})"
+        extra = "".join(
+            f"; {a.name}: {self.spec['legs'][a.leg]['passive'][a.name]['angle']} in "
+            f"[{a.limit.lo:g}, {a.limit.hi:g}]"
+            for a in self.passive_angles
+        )
+        return f"CustomMechanism(pose={list(self.pose_names)}, {legs}{extra})"

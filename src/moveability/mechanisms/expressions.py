@@ -37,6 +37,7 @@ __all__ = [
     "FUNCTIONS",
     "absolute",
     "atan2",
+    "atan2_turn",
     "cos",
     "exp",
     "is_interval",
@@ -149,6 +150,36 @@ def atan2(y: Any, x: Any) -> Any:
         yi, xi = iv.as_interval(y), iv.as_interval(x)
         cut = (xi.lo <= 0) & (yi.lo <= 0) & (yi.hi >= 0)
         return _whole(iv.arctan2(yi, xi), cut)
+    return np.arctan2(y, x)
+
+
+_PI = Interval(np.float64(np.pi), np.nextafter(np.pi, np.inf))
+
+
+def atan2_turn(y: Any, x: Any) -> Any:
+    """``atan2(y, x)`` up to whole turns, for a value read modulo 2 pi only.
+
+    Over intervals: an unwrapped enclosure, the narrower of ``atan2`` with its
+    cut on the negative x axis and ``atan2(-y, -x) + pi`` with its cut on the
+    positive one (as :func:`~moveability.mechanisms.constraints.vector_angle`),
+    so that a box crossing either cut keeps a narrow enclosure. Every value
+    of the box is enclosed up to a multiple of 2 pi; the whole turn
+    ``[-pi, pi]`` where the box may hold the origin.
+
+    Examples
+    --------
+    >>> a = atan2_turn(Interval([-0.1], [0.1]), Interval([-2.0], [-1.0]))
+    >>> bool(a.lo[0] < np.pi < a.hi[0] and a.hi[0] - a.lo[0] < 0.3)
+    True
+    """
+    if is_interval(y, x):
+        yi, xi = iv.as_interval(y), iv.as_interval(x)
+        plain = iv.arctan2(yi, xi)
+        turned = iv.arctan2(-yi, -xi) + _PI
+        narrow = (turned.hi - turned.lo) < (plain.hi - plain.lo)
+        return Interval(
+            np.where(narrow, turned.lo, plain.lo), np.where(narrow, turned.hi, plain.hi)
+        )
     return np.arctan2(y, x)
 
 
