@@ -381,6 +381,7 @@ class ConstraintMargins:
                 self._known[point, link] = (2 * int(branches[leg]) - 1, ~regular[:, leg])
         self._det_known = {(point, link): factor for point, link, factor in linkage.det_sides}
         self._cache: dict[int, tuple[NDArray[np.bool_], Interval, Point]] = {}
+        self._signed: dict[tuple[int, int], tuple[NDArray[np.bool_], list[_Option]]] = {}
         n = self._shape = next(iter(points.values()))[0].lo.shape
         holds = np.ones(n, dtype=bool)
         fails = np.zeros(n, dtype=bool)
@@ -518,19 +519,13 @@ class ConstraintMargins:
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for rise, fall, rate in self.rates(velocities, pairs=False):
                 ok &= (~rise | (rate.lo >= 0)) & (~fall | (rate.hi <= 0))
-            for (first, second, active, fold_apart), options in zip(
-                self._pairs, self._overlaps, strict=True
+            for index, ((first, second, active, fold_apart), options) in enumerate(
+                zip(self._pairs, self._overlaps, strict=True)
             ):
                 if not active.any():
                     continue
                 if det_sign and self._det_known:
-                    decided = self._pair_code(first, second, det_sign) != STRADDLES
-                    overlap = self._overlap(
-                        first, second, active & ~decided, det_sign, off_fold=True
-                    )
-                    decided |= overlap.codes != STRADDLES
-                    active = active & ~decided
-                    options = [(terms, m & active) for terms, m in overlap.sides]
+                    active, options = self._signed_pair(index, det_sign)
                 # any one of these keeps the pair apart
                 apart = fold_apart | self._apart_kept(first, second, velocities)
                 for terms, mask in options:
@@ -543,6 +538,21 @@ class ConstraintMargins:
                     apart |= holds
                 ok &= ~active | apart
         return ok
+
+    def _signed_pair(self, index: int, det_sign: int) -> tuple[NDArray[np.bool_], list[_Option]]:
+        """Pair ``index`` for the configurations with det A of sign ``det_sign``
+        alone, off the folds: where it may still touch, and the ways to keep it
+        apart (:meth:`_overlap`); computed once per sign."""
+        key = (index, det_sign)
+        if key not in self._signed:
+            first, second, active, _ = self._pairs[index]
+            decided = self._pair_code(first, second, det_sign) != STRADDLES
+            overlap = self._overlap(first, second, active & ~decided, det_sign, off_fold=True)
+            decided |= overlap.codes != STRADDLES
+            active = active & ~decided
+            options = [(terms, m & active) for terms, m in overlap.sides]
+            self._signed[key] = (active, options)
+        return self._signed[key]
 
     def excluded(self, det_sign: int) -> NDArray[np.bool_]:
         """Boxes where no configuration with det A of sign ``det_sign`` (+-1)
