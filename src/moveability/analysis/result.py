@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError, ResolutionError
@@ -443,11 +444,11 @@ def _split(
         is_child = kept_keys[at] != finer.keys
     else:
         is_child = np.ones(len(finer), dtype=bool)
-    stacked = stack_tables([table.take(np.flatnonzero(~mask)), children[0]])
-    n_kept = int((~is_child).sum())
+    # one gather from the old rows and the children's
+    stacked = stack_tables([table, children[0]])
     order = np.empty(len(finer), dtype=np.intp)
-    order[~is_child] = np.arange(n_kept)
-    order[is_child] = n_kept + np.arange(int(is_child.sum()))
+    order[~is_child] = np.flatnonzero(~mask)
+    order[is_child] = len(mask) + np.arange(int(is_child.sum()))
     old_index = np.full(len(finer), -1, dtype=np.intp)
     old_index[~is_child] = np.flatnonzero(~mask)
     return finer, stacked.take(order), old_index
@@ -474,6 +475,36 @@ def _reachable_contact(
     folds = (status == FOLD_OUTER) | (status == FOLD_INNER)
     out[idx] = real & (regular | folds).all(axis=1) & ((~regular).sum(axis=1) <= 1)
     return out
+
+
+@njit(cache=True, nogil=True)
+def _flow_labels(
+    label: NDArray[np.int64], pred: NDArray[np.int32], order: NDArray[np.intp]
+) -> None:  # pragma: no cover - compiled
+    """``label[i] = label[pred[i]]`` for the leaves of ``order``, in that order."""
+    for t in range(order.size):
+        i = order[t]
+        label[i] = label[pred[i]]
+
+
+@njit(cache=True, nogil=True)
+def _walk_back(
+    out: NDArray[np.bool_],
+    starts: NDArray[np.intp],
+    source: NDArray[np.int64],
+    pred: NDArray[np.int32],
+) -> None:  # pragma: no cover - compiled
+    """Mark each start and its predecessors up to a leaf of a part (included)."""
+    n = out.size
+    for t in range(starts.size):
+        i = starts[t]
+        while not out[i]:
+            out[i] = True
+            if source[i] >= 0:
+                break
+            i = pred[i]
+            if i < 0 or i >= n:
+                break
 
 
 def _necks(
@@ -507,13 +538,11 @@ def _necks(
     reached = np.isfinite(dist[:n])
     hops = np.where(reached, dist[:n] - 1.0, np.inf)
     label = np.where(source >= 0, source, -1)
-    # labels flow from the seeds outward, one distance at a time
+    # labels flow from the seeds outward, one distance at a time (a leaf's
+    # predecessor is one step nearer: labelled before it in this order)
     order = np.flatnonzero(reached & (source < 0))
     order = order[np.argsort(hops[order], kind="stable")]
-    levels = hops[order]
-    cuts = np.flatnonzero(np.diff(levels)) + 1
-    for chunk in np.split(order, cuts):
-        label[chunk] = label[pred[chunk]]
+    _flow_labels(label, pred, order)
     meet = (label[a] >= 0) & (label[b] >= 0) & (label[a] != label[b])
     if not meet.any():
         return out
@@ -525,12 +554,7 @@ def _necks(
     np.minimum.at(shortest, pair_key, length)
     near = length <= shortest[pair_key] + slack
     # walk back from both ends of each kept contact to its parts
-    walk = np.unique(np.concatenate([a[near], b[near]]))
-    while walk.size:
-        out[walk] = True
-        walk = walk[source[walk] < 0]
-        walk = np.unique(pred[walk])
-        walk = walk[(walk >= 0) & (walk < n) & ~out[walk]]
+    _walk_back(out, np.concatenate([a[near], b[near]]), source, pred)
     # and the gap leaves touching the chains (parts that touch have chains of
     # their own leaves alone)
     pa, pb = pairs[:, 0], pairs[:, 1]

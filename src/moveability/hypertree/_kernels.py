@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from .keys import KeyLayout
 
-__all__ = ["adjacent_pairs", "edge_components", "label_leaves"]
+__all__ = ["adjacent_pairs", "edge_components", "label_leaves", "remap_pairs"]
 
 
 @njit(cache=True, nogil=True)
@@ -296,6 +296,30 @@ def _sorted_pairs(
                 v -= 1
             out[v + 1, 1] = value
     return out
+
+
+@njit(cache=True, nogil=True)
+def remap_pairs(
+    pairs: NDArray[np.int64], new_of_old: NDArray[np.int64], sources: NDArray[np.bool_]
+) -> NDArray[np.int64]:  # pragma: no cover - compiled
+    """A coarser tree's pairs in a refined tree: the pairs of two kept leaves, by their
+    new indices (``new_of_old``, -1 for a split leaf), in the order given; the kept
+    leaf of a pair with a split one is marked in ``sources`` (it must probe)."""
+    m = pairs.shape[0]
+    out = np.empty((m, 2), dtype=np.int64)
+    k = 0
+    for t in range(m):
+        i = new_of_old[pairs[t, 0]]
+        j = new_of_old[pairs[t, 1]]
+        if i >= 0 and j >= 0:
+            out[k, 0] = i
+            out[k, 1] = j
+            k += 1
+        elif i >= 0:
+            sources[i] = True
+        elif j >= 0:
+            sources[j] = True
+    return out[:k]
 
 
 def _layout_arrays(

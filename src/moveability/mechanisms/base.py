@@ -24,13 +24,15 @@ from __future__ import annotations
 import copy
 import itertools
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
+from .. import intervals as iv
 from ..errors import InvalidParameterError
-from ..intervals import Interval
+from ..intervals import Interval, add_into, mul_into, sub_into
 from ..limits import INSIDE, JointLimit
 from ..types import Array
 from .constraints import ConstraintMargins, Constraints, Linkage
@@ -133,6 +135,9 @@ def round_down(value: float) -> float:
 def interval_det(rows: list[list[Interval]]) -> Interval:
     """Enclosure of the determinant of a square matrix of intervals (cofactor expansion).
 
+    Matrices of size 1 to 3 are expanded in compiled passes (:func:`_det_chunk`:
+    the same operations in the same order, so the same bounds).
+
     Examples
     --------
     >>> from moveability.intervals import Interval
@@ -141,12 +146,20 @@ def interval_det(rows: list[list[Interval]]) -> Interval:
     True
     """
     n = len(rows)
+    if 1 <= n <= 3:
+        return _compiled([x for row in rows for x in row], [(n, n)], _det_bounds)
+    return _interval_det(rows)
+
+
+def _interval_det(rows: list[list[Interval]]) -> Interval:
+    """:func:`interval_det` by recursion on Interval operations (any size)."""
+    n = len(rows)
     if n == 1:
         return rows[0][0]
     total: Interval | None = None
     for j in range(n):
         minor = [row[:j] + row[j + 1 :] for row in rows[1:]]
-        term = rows[0][j] * interval_det(minor)
+        term = rows[0][j] * _interval_det(minor)
         if total is None:
             total = term
         elif j % 2:
@@ -155,6 +168,125 @@ def interval_det(rows: list[list[Interval]]) -> Interval:
             total = total + term
     assert total is not None
     return total
+
+
+#: elements per pass of a compiled interval kernel (bounds the stacked copies)
+_CHUNK = 4096
+
+
+def _compiled(
+    items: list[Interval], dims: list[tuple[int, ...]], kernel: Any
+) -> Interval:
+    """``kernel`` over intervals broadcast together, in chunks of elements: its
+    arguments are, per group of ``dims`` (shapes whose sizes add up to the number
+    of items, taken in order), the lower and the upper bounds of the group's
+    items stacked as ``(*dim, chunk)``."""
+    shape = np.broadcast_shapes(*(x.lo.shape for x in items))
+    m = int(np.prod(shape, dtype=np.int64))
+    flat_lo = [np.broadcast_to(x.lo, shape).reshape(-1) for x in items]
+    flat_hi = [np.broadcast_to(x.hi, shape).reshape(-1) for x in items]
+    cuts = np.cumsum([0] + [int(np.prod(d, dtype=np.int64)) for d in dims])
+    out_lo, out_hi = np.empty(m), np.empty(m)
+    for start in range(0, m, _CHUNK):
+        stop = min(start + _CHUNK, m)
+        buf_lo = np.empty((len(items), stop - start))
+        buf_hi = np.empty_like(buf_lo)
+        for t in range(len(items)):
+            buf_lo[t] = flat_lo[t][start:stop]
+            buf_hi[t] = flat_hi[t][start:stop]
+        args = []
+        for g, dim in enumerate(dims):
+            args += [
+                buf_lo[cuts[g] : cuts[g + 1]].reshape(*dim, stop - start),
+                buf_hi[cuts[g] : cuts[g + 1]].reshape(*dim, stop - start),
+            ]
+        out_lo[start:stop], out_hi[start:stop] = kernel(*args)
+    return Interval(out_lo.reshape(shape), out_hi.reshape(shape))
+
+
+@njit(cache=True, nogil=True)
+def _det_chunk(
+    a_lo: Array, a_hi: Array, out_lo: Array, out_hi: Array, t_lo: Array, t_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """The determinants of a (k, k, w) stack of interval matrices, k <= 3, into
+    ``out`` (w,), as :func:`_interval_det` expands them (the first row's
+    cofactors, the terms alternately subtracted and added, each product
+    ``row[0][j] * minor``), one operation over the whole stack at a time;
+    ``t`` holds (2, w) scratch."""
+    k = a_lo.shape[0]
+    if k == 1:
+        out_lo[:] = a_lo[0, 0]
+        out_hi[:] = a_hi[0, 0]
+        return
+    if k == 2:
+        mul_into(a_lo[0, 0], a_hi[0, 0], a_lo[1, 1], a_hi[1, 1], out_lo, out_hi)
+        mul_into(a_lo[0, 1], a_hi[0, 1], a_lo[1, 0], a_hi[1, 0], t_lo[0], t_hi[0])
+        sub_into(out_lo, out_hi, t_lo[0], t_hi[0], out_lo, out_hi)
+        return
+    for j in range(3):
+        # the 2 x 2 minor of rows 1, 2 without column j: columns c0 < c1
+        c0 = 1 if j == 0 else 0
+        c1 = 1 if j == 2 else 2
+        mul_into(a_lo[1, c0], a_hi[1, c0], a_lo[2, c1], a_hi[2, c1], t_lo[0], t_hi[0])
+        mul_into(a_lo[1, c1], a_hi[1, c1], a_lo[2, c0], a_hi[2, c0], t_lo[1], t_hi[1])
+        sub_into(t_lo[0], t_hi[0], t_lo[1], t_hi[1], t_lo[0], t_hi[0])
+        if j == 0:
+            mul_into(a_lo[0, 0], a_hi[0, 0], t_lo[0], t_hi[0], out_lo, out_hi)
+            continue
+        mul_into(a_lo[0, j], a_hi[0, j], t_lo[0], t_hi[0], t_lo[1], t_hi[1])
+        if j == 1:
+            sub_into(out_lo, out_hi, t_lo[1], t_hi[1], out_lo, out_hi)
+        else:
+            add_into(out_lo, out_hi, t_lo[1], t_hi[1], out_lo, out_hi)
+
+
+@njit(cache=True, nogil=True)
+def _det_bounds(lo: Array, hi: Array) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    """:func:`_det_chunk` of a (k, k, w) stack."""
+    w = lo.shape[2]
+    out_lo, out_hi = np.empty(w), np.empty(w)
+    _det_chunk(lo, hi, out_lo, out_hi, np.empty((2, w)), np.empty((2, w)))
+    return out_lo, out_hi
+
+
+@njit(cache=True, nogil=True)
+def _det_rate_bounds(
+    rows_lo: Array,
+    rows_hi: Array,
+    x_lo: Array,
+    x_hi: Array,
+    q_lo: Array,
+    q_hi: Array,
+    v_lo: Array,
+    v_hi: Array,
+    r_lo: Array,
+    r_hi: Array,
+) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    """:meth:`Mechanism.det_a_rate` over a stack of w elements, in its order of
+    operations: rows (k, k, w), ``d row / dX`` (k, k, k, w: leg, entry, axis),
+    ``d row / dq`` (k, k, w), velocity (k, w) and joint rates (k, w)."""
+    k, w = rows_lo.shape[0], rows_lo.shape[2]
+    out_lo, out_hi = np.empty(w), np.empty(w)
+    term_lo, term_hi = np.empty(w), np.empty(w)
+    t_lo, t_hi = np.empty((2, w)), np.empty((2, w))
+    a_lo, a_hi = np.empty((k, k, w)), np.empty((k, k, w))
+    for i in range(k):
+        # the matrix with row i differentiated
+        a_lo[:] = rows_lo
+        a_hi[:] = rows_hi
+        for j in range(k):
+            mul_into(q_lo[i, j], q_hi[i, j], r_lo[i], r_hi[i], a_lo[i, j], a_hi[i, j])
+            for axis in range(k):
+                mul_into(
+                    x_lo[i, j, axis], x_hi[i, j, axis], v_lo[axis], v_hi[axis], t_lo[0], t_hi[0]
+                )
+                add_into(a_lo[i, j], a_hi[i, j], t_lo[0], t_hi[0], a_lo[i, j], a_hi[i, j])
+        if i == 0:
+            _det_chunk(a_lo, a_hi, out_lo, out_hi, t_lo, t_hi)
+        else:
+            _det_chunk(a_lo, a_hi, term_lo, term_hi, t_lo, t_hi)
+            add_into(out_lo, out_hi, term_lo, term_hi, out_lo, out_hi)
+    return out_lo, out_hi
 
 
 class Mechanism:
@@ -377,6 +509,15 @@ class Mechanism:
             return None
         rows, partials = known
         k = len(velocity)
+        if 1 <= k <= 3 and len(self.legs) == k:
+            # one compiled pass, the same operations in the same order as below
+            items = [x for row in rows for x in row]
+            items += [x for along_x, _ in partials for entry in along_x for x in entry]
+            items += [x for _, along_q in partials for x in along_q]
+            items += [iv.as_interval(v) for v in velocity]
+            items += [iv.as_interval(r) for r in joint_rates]
+            dims = [(k, k), (k, k, k), (k, k), (k,), (k,)]
+            return _compiled(items, dims, _det_rate_bounds)
         total: Interval | None = None
         for i in range(len(self.legs)):
             along_x, along_q = partials[i]
