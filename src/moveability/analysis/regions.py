@@ -28,9 +28,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from ..hypertree._kernels import _relabel, _union
+from ..hypertree._kernels import _edge_labels, _relabel, _union
 from ..hypertree.status import IN
-from ..hypertree.topology import edge_components
 from ..limits import JointLimit
 from .sheets import SheetTable
 
@@ -85,12 +84,50 @@ class RegionGraph:
         ).tocsr()
 
 
-def _components(
-    n_nodes: int, edges: NDArray[np.int64], taken: NDArray[np.bool_]
-) -> tuple[NDArray[np.int64], int]:
-    """Components of the taken nodes, numbered by first node; -1 elsewhere (the edges
-    may pass through nodes not taken)."""
-    return edge_components(n_nodes, edges, taken)
+@njit(cache=True, nogil=True)
+def _certain_edges(
+    a: NDArray[np.int64],
+    b: NDArray[np.int64],
+    sign: NDArray[np.int8],
+    regular_in: NDArray[np.bool_],
+    certified: NDArray[np.bool_],
+    group: NDArray[np.bool_],
+    contact: NDArray[np.bool_],
+    use_contact: bool,
+    pq: NDArray[np.int64],
+    same_leaf: NDArray[np.bool_],
+    out: NDArray[np.int64],
+    fill: bool,
+) -> int:  # pragma: no cover - compiled
+    """The certain graph's edges (node = leaf * P + posture), counted, or written
+    into ``out`` with ``fill``: per posture, the touching pairs whose sheets have
+    one sign and are a regular IN sheet and a certified one (or two fold group
+    members with a reachable contact); then, per pair of postures, the leaves
+    where both are members of one fold group of one sign."""
+    n, n_post = sign.shape
+    k = 0
+    for p in range(n_post):
+        for t in range(a.size):
+            i, j = a[t], b[t]
+            if sign[i, p] != sign[j, p]:
+                continue
+            ok = (regular_in[i, p] and certified[j, p]) or (certified[i, p] and regular_in[j, p])
+            if not ok and use_contact:
+                ok = group[i, p] and group[j, p] and contact[t]
+            if ok:
+                if fill:
+                    out[k, 0] = i * n_post + p
+                    out[k, 1] = j * n_post + p
+                k += 1
+    for g in range(pq.shape[0]):
+        p, q = pq[g, 0], pq[g, 1]
+        for i in range(n):
+            if group[i, p] and group[i, q] and same_leaf[g, i] and sign[i, p] == sign[i, q]:
+                if fill:
+                    out[k, 0] = i * n_post + p
+                    out[k, 1] = i * n_post + q
+                k += 1
+    return k
 
 
 @njit(cache=True, nogil=True)
@@ -137,7 +174,7 @@ def _possible_labels(
     hold a configuration (``alive``: (n, P)) where their pieces overlap; within a
     leaf, the postures of each pair ``pq`` join where ``same_leaf`` says they
     differ only on folding legs. Labels on the ``taken`` sub-nodes, numbered by
-    first sub-node (as :func:`edge_components`)."""
+    first sub-node (as :func:`~moveability.hypertree.topology.edge_components`)."""
     n, n_post = alive.shape
     slots = has.shape[1]
     parent = np.arange(n * n_post * slots)
@@ -240,7 +277,6 @@ def region_graph(
     n, n_post = table.status.shape
     if limits is None:
         limits = tuple(JointLimit.unlimited() for _ in range(table.angles_lo.shape[2]))
-    node = np.arange(n * n_post, dtype=np.int64).reshape(n, n_post)
     a, b = pairs[:, 0], pairs[:, 1]
     group = table.group if cross_serial else np.zeros_like(table.group)
     certified = (table.status == IN) | group
@@ -248,26 +284,31 @@ def region_graph(
     folding = table.folding if cross_serial else np.zeros_like(table.folding)
 
     # ---------------------------------------------------------------- certain
-    edges = []
-    for p in range(n_post):
-        sa, sb = table.sign[a, p], table.sign[b, p]
-        # two regular IN sheets, or a regular IN sheet and a fold group member
-        ok = (sa == sb) & (
-            ((table.status[a, p] == IN) & certified[b, p])
-            | (certified[a, p] & (table.status[b, p] == IN))
-        )
-        if reachable_contact is not None:
-            ok |= (sa == sb) & group[a, p] & group[b, p] & reachable_contact
-        edges.append(np.stack([node[a[ok], p], node[b[ok], p]], axis=1))
-    for p, q, differ in _posture_pairs(postures):
-        # members of one fold group: they differ only on legs folding in the leaf
-        same_group = (~differ[None, :] | folding).all(axis=1)
-        ok = group[:, p] & group[:, q] & same_group
-        ok &= table.sign[:, p] == table.sign[:, q]
-        idx = np.flatnonzero(ok)
-        edges.append(np.stack([node[idx, p], node[idx, q]], axis=1))
-    certain_edges = np.concatenate(edges)
-    certain, n_certain = _components(n * n_post, certain_edges, certified.ravel())
+    post_pairs = _posture_pairs(postures)
+    pq = np.array([(p, q) for p, q, _ in post_pairs], dtype=np.int64).reshape(-1, 2)
+    # per posture pair, the leaves where the two differ only on folding legs
+    same_leaf = (
+        np.stack([(~differ[None, :] | folding).all(axis=1) for _, _, differ in post_pairs])
+        if post_pairs
+        else np.zeros((0, n), dtype=bool)
+    )
+    pa, pb = np.ascontiguousarray(a, dtype=np.int64), np.ascontiguousarray(b, dtype=np.int64)
+    contact = (
+        np.zeros(0, dtype=bool)
+        if reachable_contact is None
+        else np.ascontiguousarray(reachable_contact, dtype=bool)
+    )
+    args = (
+        pa, pb, np.ascontiguousarray(table.sign), np.ascontiguousarray(table.status == IN),
+        np.ascontiguousarray(certified), np.ascontiguousarray(group), contact,
+        reachable_contact is not None, pq, same_leaf,
+    )  # fmt: skip
+    n_edges = _certain_edges(*args, np.zeros((0, 2), dtype=np.int64), False)
+    certain_edges = np.empty((n_edges, 2), dtype=np.int64)
+    _certain_edges(*args, certain_edges, True)
+    certain, n_certain = _edge_labels(
+        n * n_post, certain_edges[:, 0], certain_edges[:, 1], certified.ravel()
+    )
     certain_sign = np.zeros(n_certain, dtype=np.int8)
     labelled = certain >= 0
     certain_sign[certain[labelled]] = table.sign.ravel()[labelled]
@@ -300,13 +341,7 @@ def region_graph(
     piece_lo = np.ascontiguousarray(np.stack([piece[0] for piece in pieces]))
     piece_hi = np.ascontiguousarray(np.stack([piece[1] for piece in pieces]))
     combo = np.asarray(combos, dtype=np.int64).reshape(slots, n_legs)
-    post_pairs = _posture_pairs(postures)
-    pq = np.array([(p, q) for p, q, _ in post_pairs], dtype=np.int64).reshape(-1, 2)
-    same_leaf = np.stack(
-        [(~differ[None, :] | folding).all(axis=1) for _, _, differ in post_pairs]
-    ) if post_pairs else np.zeros((0, n), dtype=bool)
     has_c = np.ascontiguousarray(has)
-    pa, pb = np.ascontiguousarray(a, dtype=np.int64), np.ascontiguousarray(b, dtype=np.int64)
     possible = np.full((2, n * n_post * slots), -1, dtype=np.int64)
     counts = []
     for row, s in enumerate((1, -1)):

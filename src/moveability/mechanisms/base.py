@@ -147,7 +147,7 @@ def interval_det(rows: list[list[Interval]]) -> Interval:
     """
     n = len(rows)
     if 1 <= n <= 3:
-        return _compiled([x for row in rows for x in row], [(n, n)], _det_bounds)
+        return _compiled([x for row in rows for x in row], _det_bounds)
     return _interval_det(rows)
 
 
@@ -170,37 +170,28 @@ def _interval_det(rows: list[list[Interval]]) -> Interval:
     return total
 
 
-#: elements per pass of a compiled interval kernel (bounds the stacked copies)
-_CHUNK = 4096
+#: elements per pass of the compiled determinant kernels (their scratch stays in cache)
+_CHUNK = 2048
 
 
-def _compiled(
-    items: list[Interval], dims: list[tuple[int, ...]], kernel: Any
-) -> Interval:
-    """``kernel`` over intervals broadcast together, in chunks of elements: its
-    arguments are, per group of ``dims`` (shapes whose sizes add up to the number
-    of items, taken in order), the lower and the upper bounds of the group's
-    items stacked as ``(*dim, chunk)``."""
+def _compiled(items: list[Interval], kernel: Any) -> Interval:
+    """``kernel(lo, hi, out_lo, out_hi)`` over intervals broadcast together: their
+    bounds as tuples of flat read-only arrays (views where they can be: no stacked
+    copy), the result's bounds written into ``out``."""
     shape = np.broadcast_shapes(*(x.lo.shape for x in items))
     m = int(np.prod(shape, dtype=np.int64))
-    flat_lo = [np.broadcast_to(x.lo, shape).reshape(-1) for x in items]
-    flat_hi = [np.broadcast_to(x.hi, shape).reshape(-1) for x in items]
-    cuts = np.cumsum([0] + [int(np.prod(d, dtype=np.int64)) for d in dims])
+
+    def flat(bound: Array) -> Array:
+        b = np.asarray(bound, dtype=np.float64)
+        b = np.ascontiguousarray(b if b.shape == shape else np.broadcast_to(b, shape))
+        view = b.reshape(-1).view()
+        view.flags.writeable = False  # one array type for every item
+        return view
+
+    lo = tuple(flat(x.lo) for x in items)
+    hi = tuple(flat(x.hi) for x in items)
     out_lo, out_hi = np.empty(m), np.empty(m)
-    for start in range(0, m, _CHUNK):
-        stop = min(start + _CHUNK, m)
-        buf_lo = np.empty((len(items), stop - start))
-        buf_hi = np.empty_like(buf_lo)
-        for t in range(len(items)):
-            buf_lo[t] = flat_lo[t][start:stop]
-            buf_hi[t] = flat_hi[t][start:stop]
-        args = []
-        for g, dim in enumerate(dims):
-            args += [
-                buf_lo[cuts[g] : cuts[g + 1]].reshape(*dim, stop - start),
-                buf_hi[cuts[g] : cuts[g + 1]].reshape(*dim, stop - start),
-            ]
-        out_lo[start:stop], out_hi[start:stop] = kernel(*args)
+    kernel(lo, hi, out_lo, out_hi)
     return Interval(out_lo.reshape(shape), out_hi.reshape(shape))
 
 
@@ -241,52 +232,77 @@ def _det_chunk(
 
 
 @njit(cache=True, nogil=True)
-def _det_bounds(lo: Array, hi: Array) -> tuple[Array, Array]:  # pragma: no cover - compiled
-    """:func:`_det_chunk` of a (k, k, w) stack."""
-    w = lo.shape[2]
-    out_lo, out_hi = np.empty(w), np.empty(w)
-    _det_chunk(lo, hi, out_lo, out_hi, np.empty((2, w)), np.empty((2, w)))
-    return out_lo, out_hi
+def _det_bounds(
+    lo: Any, hi: Any, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """:func:`_det_chunk` of the k x k matrices whose entries (row by row) are the
+    flat arrays of the tuples ``lo`` and ``hi``, chunk by chunk."""
+    k = 1 if len(lo) == 1 else (2 if len(lo) == 4 else 3)
+    m = out_lo.size
+    t_lo, t_hi = np.empty((2, _CHUNK)), np.empty((2, _CHUNK))
+    a_lo, a_hi = np.empty((k, k, _CHUNK)), np.empty((k, k, _CHUNK))
+    for s in range(0, m, _CHUNK):
+        e = min(s + _CHUNK, m)
+        if e - s < _CHUNK:
+            t_lo, t_hi = np.empty((2, e - s)), np.empty((2, e - s))
+            a_lo, a_hi = np.empty((k, k, e - s)), np.empty((k, k, e - s))
+        for r in range(k):
+            for c in range(k):
+                a_lo[r, c] = lo[r * k + c][s:e]
+                a_hi[r, c] = hi[r * k + c][s:e]
+        _det_chunk(a_lo, a_hi, out_lo[s:e], out_hi[s:e], t_lo, t_hi)
 
 
 @njit(cache=True, nogil=True)
 def _det_rate_bounds(
-    rows_lo: Array,
-    rows_hi: Array,
-    x_lo: Array,
-    x_hi: Array,
-    q_lo: Array,
-    q_hi: Array,
-    v_lo: Array,
-    v_hi: Array,
-    r_lo: Array,
-    r_hi: Array,
-) -> tuple[Array, Array]:  # pragma: no cover - compiled
-    """:meth:`Mechanism.det_a_rate` over a stack of w elements, in its order of
-    operations: rows (k, k, w), ``d row / dX`` (k, k, k, w: leg, entry, axis),
-    ``d row / dq`` (k, k, w), velocity (k, w) and joint rates (k, w)."""
-    k, w = rows_lo.shape[0], rows_lo.shape[2]
-    out_lo, out_hi = np.empty(w), np.empty(w)
-    term_lo, term_hi = np.empty(w), np.empty(w)
-    t_lo, t_hi = np.empty((2, w)), np.empty((2, w))
-    a_lo, a_hi = np.empty((k, k, w)), np.empty((k, k, w))
-    for i in range(k):
-        # the matrix with row i differentiated
-        a_lo[:] = rows_lo
-        a_hi[:] = rows_hi
-        for j in range(k):
-            mul_into(q_lo[i, j], q_hi[i, j], r_lo[i], r_hi[i], a_lo[i, j], a_hi[i, j])
-            for axis in range(k):
+    lo: Any, hi: Any, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """:meth:`Mechanism.det_a_rate` of flat arrays (tuples ``lo``, ``hi``), in
+    its order of operations, chunk by chunk. The arrays are: the rows (k x k),
+    ``d row / dX`` (leg, entry, axis: k x k x k), ``d row / dq`` (leg, entry: k x
+    k), the velocity (k) and the joint rates (k)."""
+    k = 1 if len(lo) == 5 else (2 if len(lo) == 20 else 3)
+    at_x = k * k
+    at_q = at_x + k * k * k
+    at_v = at_q + k * k
+    at_r = at_v + k
+    m = out_lo.size
+    term_lo, term_hi = np.empty(_CHUNK), np.empty(_CHUNK)
+    t_lo, t_hi = np.empty((2, _CHUNK)), np.empty((2, _CHUNK))
+    a_lo, a_hi = np.empty((k, k, _CHUNK)), np.empty((k, k, _CHUNK))
+    for s in range(0, m, _CHUNK):
+        e = min(s + _CHUNK, m)
+        if e - s < _CHUNK:
+            term_lo, term_hi = np.empty(e - s), np.empty(e - s)
+            t_lo, t_hi = np.empty((2, e - s)), np.empty((2, e - s))
+            a_lo, a_hi = np.empty((k, k, e - s)), np.empty((k, k, e - s))
+        o_lo, o_hi = out_lo[s:e], out_hi[s:e]
+        for i in range(k):
+            # the matrix with row i differentiated
+            for r in range(k):
+                if r == i:
+                    continue
+                for c in range(k):
+                    a_lo[r, c] = lo[r * k + c][s:e]
+                    a_hi[r, c] = hi[r * k + c][s:e]
+            for j in range(k):
+                q = at_q + i * k + j
                 mul_into(
-                    x_lo[i, j, axis], x_hi[i, j, axis], v_lo[axis], v_hi[axis], t_lo[0], t_hi[0]
-                )
-                add_into(a_lo[i, j], a_hi[i, j], t_lo[0], t_hi[0], a_lo[i, j], a_hi[i, j])
-        if i == 0:
-            _det_chunk(a_lo, a_hi, out_lo, out_hi, t_lo, t_hi)
-        else:
-            _det_chunk(a_lo, a_hi, term_lo, term_hi, t_lo, t_hi)
-            add_into(out_lo, out_hi, term_lo, term_hi, out_lo, out_hi)
-    return out_lo, out_hi
+                    lo[q][s:e], hi[q][s:e], lo[at_r + i][s:e], hi[at_r + i][s:e],
+                    a_lo[i, j], a_hi[i, j],
+                )  # fmt: skip
+                for axis in range(k):
+                    x = at_x + (i * k + j) * k + axis
+                    mul_into(
+                        lo[x][s:e], hi[x][s:e], lo[at_v + axis][s:e], hi[at_v + axis][s:e],
+                        t_lo[0], t_hi[0],
+                    )  # fmt: skip
+                    add_into(a_lo[i, j], a_hi[i, j], t_lo[0], t_hi[0], a_lo[i, j], a_hi[i, j])
+            if i == 0:
+                _det_chunk(a_lo, a_hi, o_lo, o_hi, t_lo, t_hi)
+            else:
+                _det_chunk(a_lo, a_hi, term_lo, term_hi, t_lo, t_hi)
+                add_into(o_lo, o_hi, term_lo, term_hi, o_lo, o_hi)
 
 
 class Mechanism:
@@ -516,8 +532,7 @@ class Mechanism:
             items += [x for _, along_q in partials for x in along_q]
             items += [iv.as_interval(v) for v in velocity]
             items += [iv.as_interval(r) for r in joint_rates]
-            dims = [(k, k), (k, k, k), (k, k), (k,), (k,)]
-            return _compiled(items, dims, _det_rate_bounds)
+            return _compiled(items, _det_rate_bounds)
         total: Interval | None = None
         for i in range(len(self.legs)):
             along_x, along_q = partials[i]
