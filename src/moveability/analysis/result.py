@@ -507,6 +507,45 @@ def _walk_back(
                 break
 
 
+@njit(cache=True, nogil=True)
+def _chain_edges(
+    pairs: NDArray[np.intp], through: NDArray[np.bool_], seeds: NDArray[np.intp], n: int
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
+    """Rows and columns of the edges of :func:`_necks`' graph: the pairs whose two
+    leaves are ``through`` (in the order of ``pairs``), then ``(n, seed)``."""
+    m = 0
+    for t in range(pairs.shape[0]):
+        if through[pairs[t, 0]] and through[pairs[t, 1]]:
+            m += 1
+    rows = np.empty(m + seeds.size, dtype=np.int64)
+    cols = np.empty(m + seeds.size, dtype=np.int64)
+    k = 0
+    for t in range(pairs.shape[0]):
+        if through[pairs[t, 0]] and through[pairs[t, 1]]:
+            rows[k] = pairs[t, 0]
+            cols[k] = pairs[t, 1]
+            k += 1
+    for t in range(seeds.size):
+        rows[m + t] = n
+        cols[m + t] = seeds[t]
+    return rows, cols
+
+
+@njit(cache=True, nogil=True)
+def _grown(
+    out: NDArray[np.bool_], pairs: NDArray[np.intp]
+) -> NDArray[np.bool_]:  # pragma: no cover - compiled
+    """``out`` and the leaves touching it (by ``pairs``)."""
+    grown = out.copy()
+    for t in range(pairs.shape[0]):
+        i, j = pairs[t, 0], pairs[t, 1]
+        if out[i]:
+            grown[j] = True
+        if out[j]:
+            grown[i] = True
+    return grown
+
+
 def _necks(
     pairs: NDArray[np.intp], gap: NDArray[np.bool_], source: NDArray[np.int64], slack: int
 ) -> NDArray[np.bool_]:
@@ -525,10 +564,10 @@ def _necks(
     out = np.zeros(n, dtype=bool)
     seeds = np.flatnonzero(source >= 0)
     through = gap | (source >= 0)
-    keep = through[pairs[:, 0]] & through[pairs[:, 1]]
-    a, b = pairs[keep, 0], pairs[keep, 1]
-    rows = np.concatenate([a, np.full(seeds.size, n)])
-    cols = np.concatenate([b, seeds])
+    # the pairs of leaves that both lie on some chain, then an edge from a node
+    # n to every seed
+    rows, cols = _chain_edges(pairs, through, seeds, n)
+    a, b = rows[: rows.size - seeds.size], cols[: cols.size - seeds.size]
     graph = coo_matrix(
         (np.ones(rows.size, dtype=np.int8), (rows, cols)), shape=(n + 1, n + 1)
     ).tocsr()
@@ -557,11 +596,7 @@ def _necks(
     _walk_back(out, np.concatenate([a[near], b[near]]), source, pred)
     # and the gap leaves touching the chains (parts that touch have chains of
     # their own leaves alone)
-    pa, pb = pairs[:, 0], pairs[:, 1]
-    grown = out.copy()
-    grown[pb[out[pa]]] = True
-    grown[pa[out[pb]]] = True
-    return grown & gap
+    return _grown(out, pairs) & gap
 
 
 def count_text(at_least: int, at_most: int | None, noun: str = "region") -> str:
