@@ -210,15 +210,12 @@ def _product_bounds(
 @njit(cache=True, nogil=True, inline="always")
 def _down(x: float, keep_zero: bool) -> float:  # pragma: no cover - compiled
     """:func:`_below` by one ulp (or a few), inlined into the compiled interval
-    helpers below: a call per element to a separately compiled function costs
-    several times the arithmetic."""
-    if x != x or (keep_zero and x == 0.0):
-        return x
-    if x > _MAX:
-        return _MAX
-    if x < -_HUGE:
-        return -np.inf
-    return x - (abs(x) * _REL_1 + _TINY)
+    helpers below (a call per element to a separately compiled function costs
+    several times the arithmetic), and without jumps on the data (selects)."""
+    y = x - (abs(x) * _REL_1 + _TINY)
+    y = -np.inf if x < -_HUGE else y
+    y = _MAX if x > _MAX else y  # +inf: an overflow, the exact value is finite
+    return x if (x != x or (keep_zero and x == 0.0)) else y
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -308,6 +305,43 @@ def sub_into(
         out_lo[i], out_hi[i] = interval_sub(a_lo[i], a_hi[i], b_lo[i], b_hi[i])
 
 
+@njit(cache=True, nogil=True)
+def _sum_bounds_one(a: Array, b: float, up: bool) -> Array:  # pragma: no cover - compiled
+    """:func:`_sum_bounds` with one number ``b`` for every element (no broadcast copy)."""
+    out = np.empty_like(a)
+    for i in range(a.size):
+        s = a[i] + b
+        out[i] = _above(s, _REL_1, _TINY, True) if up else _below(s, _REL_1, _TINY, True)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _product_bounds_one(
+    a_lo: Array, a_hi: Array, b_lo: float, b_hi: float
+) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    """:func:`_product_bounds` with one interval ``[b_lo, b_hi]`` for every element."""
+    n = a_lo.size
+    out_lo = np.empty(n)
+    out_hi = np.empty(n)
+    for i in range(n):
+        out_lo[i], out_hi[i] = interval_mul(a_lo[i], a_hi[i], b_lo, b_hi)
+    return out_lo, out_hi
+
+
+def _full_and_one(a: Interval, b: Interval) -> tuple[Interval, Interval] | None:
+    """``(full, one)`` when one operand holds a single interval that broadcasts to
+    the other's shape (the other first), else None."""
+    if b.lo.size == 1 and b.lo.ndim <= a.lo.ndim and a.lo.size != 1:
+        return a, b
+    if a.lo.size == 1 and a.lo.ndim <= b.lo.ndim and b.lo.size != 1:
+        return b, a
+    return None
+
+
+def _flat(x: Array) -> Array:
+    return np.ascontiguousarray(x).reshape(-1)
+
+
 @dataclass(frozen=True)
 class Interval:
     """An array of closed intervals ``[lo, hi]``.
@@ -367,6 +401,15 @@ class Interval:
 
     def __add__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
+        pair = _full_and_one(self, o)
+        if pair is not None:
+            # one number for every element: no broadcast copy (a sum is commutative)
+            full, one = pair
+            shape = full.lo.shape
+            return Interval(
+                _sum_bounds_one(_flat(full.lo), float(one.lo.flat[0]), False).reshape(shape),
+                _sum_bounds_one(_flat(full.hi), float(one.hi.flat[0]), True).reshape(shape),
+            )
         with np.errstate(over="ignore"):
             shape, (a_lo, a_hi, b_lo, b_hi) = flat_arrays(self.lo, self.hi, o.lo, o.hi)
         return Interval(
@@ -378,6 +421,9 @@ class Interval:
 
     def __sub__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
+        if _full_and_one(self, o) is not None:
+            # self - o = self + (-o): negation is exact
+            return self + Interval(-o.hi, -o.lo)
         with np.errstate(over="ignore"):
             shape, (a_lo, a_hi, b_lo, b_hi) = flat_arrays(self.lo, self.hi, o.lo, o.hi)
         return Interval(
@@ -396,6 +442,14 @@ class Interval:
             # one shape: no broadcast (reshape copies only what is not contiguous)
             lo, hi = _product_bounds(*(x.reshape(-1) for x in parts))
             return Interval(lo.reshape(shape), hi.reshape(shape))
+        pair = _full_and_one(self, o)
+        if pair is not None:
+            # one interval for every element (a product's four bounds are symmetric)
+            full, one = pair
+            lo, hi = _product_bounds_one(
+                _flat(full.lo), _flat(full.hi), float(one.lo.flat[0]), float(one.hi.flat[0])
+            )
+            return Interval(lo.reshape(full.lo.shape), hi.reshape(full.lo.shape))
         shape = np.broadcast_shapes(*(x.shape for x in parts))
 
         def flat(x: Array) -> Array:
