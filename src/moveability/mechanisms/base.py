@@ -147,7 +147,7 @@ def interval_det(rows: list[list[Interval]]) -> Interval:
     """
     n = len(rows)
     if 1 <= n <= 3:
-        return _compiled([x for row in rows for x in row], _det_bounds)
+        return _compiled([iv.as_interval(x) for row in rows for x in row], _det_bounds)
     return _interval_det(rows)
 
 
@@ -527,9 +527,11 @@ class Mechanism:
         k = len(velocity)
         if 1 <= k <= 3 and len(self.legs) == k:
             # one compiled pass, the same operations in the same order as below
-            items = [x for row in rows for x in row]
-            items += [x for along_x, _ in partials for entry in along_x for x in entry]
-            items += [x for _, along_q in partials for x in along_q]
+            items = [iv.as_interval(x) for row in rows for x in row]
+            items += [
+                iv.as_interval(x) for along_x, _ in partials for entry in along_x for x in entry
+            ]
+            items += [iv.as_interval(x) for _, along_q in partials for x in along_q]
             items += [iv.as_interval(v) for v in velocity]
             items += [iv.as_interval(r) for r in joint_rates]
             return _compiled(items, _det_rate_bounds)
