@@ -32,20 +32,26 @@ from .types import Array
 __all__ = [
     "Interval",
     "absolute",
+    "add_into",
     "arccos",
     "arctan2",
     "cos",
     "exp",
     "flat_arrays",
     "hull",
+    "interval_add",
+    "interval_mul",
+    "interval_sub",
     "log",
     "may_contain_angle",
+    "mul_into",
     "next_below",
     "power",
     "rational",
     "sin",
     "sqrt",
     "square",
+    "sub_into",
     "tan",
     "widen_down",
     "widen_up",
@@ -201,6 +207,141 @@ def _product_bounds(
     return out_lo, out_hi
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _down(x: float, keep_zero: bool) -> float:  # pragma: no cover - compiled
+    """:func:`_below` by one ulp (or a few), inlined into the compiled interval
+    helpers below (a call per element to a separately compiled function costs
+    several times the arithmetic), and without jumps on the data (selects)."""
+    y = x - (abs(x) * _REL_1 + _TINY)
+    y = -np.inf if x < -_HUGE else y
+    y = _MAX if x > _MAX else y  # +inf: an overflow, the exact value is finite
+    return x if (x != x or (keep_zero and x == 0.0)) else y
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _up(x: float, keep_zero: bool) -> float:  # pragma: no cover - compiled
+    """:func:`_above` by one ulp (or a few), inlined (see :func:`_down`)."""
+    return -_down(-x, keep_zero)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def interval_mul(
+    a_lo: float, a_hi: float, b_lo: float, b_hi: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """One element of :func:`_product_bounds`: ``[a_lo, a_hi] * [b_lo, b_hi]``,
+    widened as :meth:`Interval.__mul__` does, for compiled code.
+
+    Branch-free (selects, no jumps on the data): the four bound products (``0 *
+    inf`` taken as 0), their least and greatest (of equal products either: a
+    zero's sign is lost below), and the underflow flag of the kernel's loop."""
+    p1 = a_lo * b_lo
+    p2 = a_lo * b_hi
+    p3 = a_hi * b_lo
+    p4 = a_hi * b_hi
+    p1 = 0.0 if p1 != p1 else p1
+    p2 = 0.0 if p2 != p2 else p2
+    p3 = 0.0 if p3 != p3 else p3
+    p4 = 0.0 if p4 != p4 else p4
+    l12 = p1 if p1 < p2 else p2
+    l34 = p3 if p3 < p4 else p4
+    h12 = p1 if p1 > p2 else p2
+    h34 = p3 if p3 > p4 else p4
+    low = l12 if l12 < l34 else l34
+    high = h12 if h12 > h34 else h34
+    # a zero product of two non-zero factors: an underflow, not an exact zero
+    under = (
+        ((p1 == 0.0) & (a_lo != 0.0) & (b_lo != 0.0))
+        | ((p2 == 0.0) & (a_lo != 0.0) & (b_hi != 0.0))
+        | ((p3 == 0.0) & (a_hi != 0.0) & (b_lo != 0.0))
+        | ((p4 == 0.0) & (a_hi != 0.0) & (b_hi != 0.0))
+    )
+    out_lo = 0.0 if (low == 0.0 and not under) else _down(low, False)
+    out_hi = 0.0 if (high == 0.0 and not under) else _up(high, False)
+    return out_lo, out_hi
+
+
+@njit(cache=True, nogil=True, inline="always")
+def interval_add(
+    a_lo: float, a_hi: float, b_lo: float, b_hi: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """One element of :meth:`Interval.__add__`, for compiled code."""
+    return _down(a_lo + b_lo, True), _up(a_hi + b_hi, True)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def interval_sub(
+    a_lo: float, a_hi: float, b_lo: float, b_hi: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """One element of :meth:`Interval.__sub__`, for compiled code."""
+    return _down(a_lo + -b_hi, True), _up(a_hi + -b_lo, True)
+
+
+@njit(cache=True, nogil=True)
+def mul_into(
+    a_lo: Array, a_hi: Array, b_lo: Array, b_hi: Array, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """:func:`interval_mul` of flat arrays of one size, into ``out`` (which may be
+    one of the operands): a whole array per call, so compiled code that chains
+    interval operations pays no call per element."""
+    for i in range(out_lo.size):
+        out_lo[i], out_hi[i] = interval_mul(a_lo[i], a_hi[i], b_lo[i], b_hi[i])
+
+
+@njit(cache=True, nogil=True)
+def add_into(
+    a_lo: Array, a_hi: Array, b_lo: Array, b_hi: Array, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """:func:`interval_add` of flat arrays, into ``out`` (see :func:`mul_into`)."""
+    for i in range(out_lo.size):
+        out_lo[i], out_hi[i] = interval_add(a_lo[i], a_hi[i], b_lo[i], b_hi[i])
+
+
+@njit(cache=True, nogil=True)
+def sub_into(
+    a_lo: Array, a_hi: Array, b_lo: Array, b_hi: Array, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """:func:`interval_sub` of flat arrays, into ``out`` (see :func:`mul_into`)."""
+    for i in range(out_lo.size):
+        out_lo[i], out_hi[i] = interval_sub(a_lo[i], a_hi[i], b_lo[i], b_hi[i])
+
+
+@njit(cache=True, nogil=True)
+def _sum_bounds_one(a: Array, b: float, up: bool) -> Array:  # pragma: no cover - compiled
+    """:func:`_sum_bounds` with one number ``b`` for every element (no broadcast copy)."""
+    out = np.empty_like(a)
+    for i in range(a.size):
+        s = a[i] + b
+        out[i] = _above(s, _REL_1, _TINY, True) if up else _below(s, _REL_1, _TINY, True)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _product_bounds_one(
+    a_lo: Array, a_hi: Array, b_lo: float, b_hi: float
+) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    """:func:`_product_bounds` with one interval ``[b_lo, b_hi]`` for every element."""
+    n = a_lo.size
+    out_lo = np.empty(n)
+    out_hi = np.empty(n)
+    for i in range(n):
+        out_lo[i], out_hi[i] = interval_mul(a_lo[i], a_hi[i], b_lo, b_hi)
+    return out_lo, out_hi
+
+
+def _full_and_one(a: Interval, b: Interval) -> tuple[Interval, Interval] | None:
+    """``(full, one)`` when one operand holds a single interval that broadcasts to
+    the other's shape (the other first), else None."""
+    if b.lo.size == 1 and b.lo.ndim <= a.lo.ndim and a.lo.size != 1:
+        return a, b
+    if a.lo.size == 1 and a.lo.ndim <= b.lo.ndim and b.lo.size != 1:
+        return b, a
+    return None
+
+
+def _flat(x: Array) -> Array:
+    return np.ascontiguousarray(x).reshape(-1)
+
+
 @dataclass(frozen=True)
 class Interval:
     """An array of closed intervals ``[lo, hi]``.
@@ -260,6 +401,15 @@ class Interval:
 
     def __add__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
+        pair = _full_and_one(self, o)
+        if pair is not None:
+            # one number for every element: no broadcast copy (a sum is commutative)
+            full, one = pair
+            shape = full.lo.shape
+            return Interval(
+                _sum_bounds_one(_flat(full.lo), float(one.lo.flat[0]), False).reshape(shape),
+                _sum_bounds_one(_flat(full.hi), float(one.hi.flat[0]), True).reshape(shape),
+            )
         with np.errstate(over="ignore"):
             shape, (a_lo, a_hi, b_lo, b_hi) = flat_arrays(self.lo, self.hi, o.lo, o.hi)
         return Interval(
@@ -271,6 +421,9 @@ class Interval:
 
     def __sub__(self, other: IntervalLike) -> Interval:
         o = as_interval(other)
+        if _full_and_one(self, o) is not None:
+            # self - o = self + (-o): negation is exact
+            return self + Interval(-o.hi, -o.lo)
         with np.errstate(over="ignore"):
             shape, (a_lo, a_hi, b_lo, b_hi) = flat_arrays(self.lo, self.hi, o.lo, o.hi)
         return Interval(
@@ -289,6 +442,14 @@ class Interval:
             # one shape: no broadcast (reshape copies only what is not contiguous)
             lo, hi = _product_bounds(*(x.reshape(-1) for x in parts))
             return Interval(lo.reshape(shape), hi.reshape(shape))
+        pair = _full_and_one(self, o)
+        if pair is not None:
+            # one interval for every element (a product's four bounds are symmetric)
+            full, one = pair
+            lo, hi = _product_bounds_one(
+                _flat(full.lo), _flat(full.hi), float(one.lo.flat[0]), float(one.hi.flat[0])
+            )
+            return Interval(lo.reshape(full.lo.shape), hi.reshape(full.lo.shape))
         shape = np.broadcast_shapes(*(x.shape for x in parts))
 
         def flat(x: Array) -> Array:

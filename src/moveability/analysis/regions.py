@@ -25,10 +25,11 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
+from ..hypertree._kernels import _edge_labels, _relabel, _union
 from ..hypertree.status import IN
-from ..hypertree.topology import edge_components
 from ..limits import JointLimit
 from .sheets import SheetTable
 
@@ -83,12 +84,123 @@ class RegionGraph:
         ).tocsr()
 
 
-def _components(
-    n_nodes: int, edges: NDArray[np.int64], taken: NDArray[np.bool_]
-) -> tuple[NDArray[np.int64], int]:
-    """Components of the taken nodes, numbered by first node; -1 elsewhere (the edges
-    may pass through nodes not taken)."""
-    return edge_components(n_nodes, edges, taken)
+@njit(cache=True, nogil=True)
+def _certain_edges(
+    a: NDArray[np.int64],
+    b: NDArray[np.int64],
+    sign: NDArray[np.int8],
+    regular_in: NDArray[np.bool_],
+    certified: NDArray[np.bool_],
+    group: NDArray[np.bool_],
+    contact: NDArray[np.bool_],
+    use_contact: bool,
+    pq: NDArray[np.int64],
+    same_leaf: NDArray[np.bool_],
+    out: NDArray[np.int64],
+    fill: bool,
+) -> int:  # pragma: no cover - compiled
+    """The certain graph's edges (node = leaf * P + posture), counted, or written
+    into ``out`` with ``fill``: per posture, the touching pairs whose sheets have
+    one sign and are a regular IN sheet and a certified one (or two fold group
+    members with a reachable contact); then, per pair of postures, the leaves
+    where both are members of one fold group of one sign."""
+    n, n_post = sign.shape
+    k = 0
+    for p in range(n_post):
+        for t in range(a.size):
+            i, j = a[t], b[t]
+            if sign[i, p] != sign[j, p]:
+                continue
+            ok = (regular_in[i, p] and certified[j, p]) or (certified[i, p] and regular_in[j, p])
+            if not ok and use_contact:
+                ok = group[i, p] and group[j, p] and contact[t]
+            if ok:
+                if fill:
+                    out[k, 0] = i * n_post + p
+                    out[k, 1] = j * n_post + p
+                k += 1
+    for g in range(pq.shape[0]):
+        p, q = pq[g, 0], pq[g, 1]
+        for i in range(n):
+            if group[i, p] and group[i, q] and same_leaf[g, i] and sign[i, p] == sign[i, q]:
+                if fill:
+                    out[k, 0] = i * n_post + p
+                    out[k, 1] = i * n_post + q
+                k += 1
+    return k
+
+
+@njit(cache=True, nogil=True)
+def _pieces_meet(
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+    combo: NDArray[np.int64],
+    i: int,
+    p: int,
+    ci: int,
+    j: int,
+    q: int,
+    cj: int,
+    tol: float,
+) -> bool:  # pragma: no cover - compiled
+    """Whether the pieces of sub-node (i, p, ci) and (j, q, cj) overlap on every leg."""
+    for leg in range(lo.shape[0]):
+        ki, kj = combo[ci, leg], combo[cj, leg]
+        if not (lo[leg, ki, i, p] <= hi[leg, kj, j, q] + tol):
+            return False
+        if not (lo[leg, kj, j, q] <= hi[leg, ki, i, p] + tol):
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _possible_labels(
+    a: NDArray[np.int64],
+    b: NDArray[np.int64],
+    alive: NDArray[np.bool_],
+    has: NDArray[np.bool_],
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+    combo: NDArray[np.int64],
+    pq: NDArray[np.int64],
+    same_leaf: NDArray[np.bool_],
+    taken: NDArray[np.bool_],
+    tol: float,
+) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
+    """Components of the possible graph of one sign, joined on the fly (no edge list).
+
+    Sub-node ``(leaf * P + posture) * slots + slot``. Touching leaves ``a``, ``b``
+    join the same posture's sub-nodes that exist (``has``: (P, slots, n)) and may
+    hold a configuration (``alive``: (n, P)) where their pieces overlap; within a
+    leaf, the postures of each pair ``pq`` join where ``same_leaf`` says they
+    differ only on folding legs. Labels on the ``taken`` sub-nodes, numbered by
+    first sub-node (as :func:`~moveability.hypertree.topology.edge_components`)."""
+    n, n_post = alive.shape
+    slots = has.shape[1]
+    parent = np.arange(n * n_post * slots)
+    for t in range(a.size):
+        i, j = a[t], b[t]
+        for p in range(n_post):
+            if not (alive[i, p] and alive[j, p]):
+                continue
+            for ci in range(slots):
+                if not has[p, ci, i]:
+                    continue
+                for cj in range(slots):
+                    if has[p, cj, j] and _pieces_meet(lo, hi, combo, i, p, ci, j, p, cj, tol):
+                        _union(parent, (i * n_post + p) * slots + ci, (j * n_post + p) * slots + cj)
+    for k in range(pq.shape[0]):
+        p, q = pq[k, 0], pq[k, 1]
+        for i in range(n):
+            if not (alive[i, p] and alive[i, q] and same_leaf[k, i]):
+                continue
+            for cp in range(slots):
+                if not has[p, cp, i]:
+                    continue
+                for cq in range(slots):
+                    if has[q, cq, i] and _pieces_meet(lo, hi, combo, i, p, cp, i, q, cq, tol):
+                        _union(parent, (i * n_post + p) * slots + cp, (i * n_post + q) * slots + cq)
+    return _relabel(parent, taken)
 
 
 def _posture_pairs(postures: NDArray[np.int64]) -> list[tuple[int, int, NDArray[np.bool_]]]:
@@ -165,7 +277,6 @@ def region_graph(
     n, n_post = table.status.shape
     if limits is None:
         limits = tuple(JointLimit.unlimited() for _ in range(table.angles_lo.shape[2]))
-    node = np.arange(n * n_post, dtype=np.int64).reshape(n, n_post)
     a, b = pairs[:, 0], pairs[:, 1]
     group = table.group if cross_serial else np.zeros_like(table.group)
     certified = (table.status == IN) | group
@@ -173,26 +284,31 @@ def region_graph(
     folding = table.folding if cross_serial else np.zeros_like(table.folding)
 
     # ---------------------------------------------------------------- certain
-    edges = []
-    for p in range(n_post):
-        sa, sb = table.sign[a, p], table.sign[b, p]
-        # two regular IN sheets, or a regular IN sheet and a fold group member
-        ok = (sa == sb) & (
-            ((table.status[a, p] == IN) & certified[b, p])
-            | (certified[a, p] & (table.status[b, p] == IN))
-        )
-        if reachable_contact is not None:
-            ok |= (sa == sb) & group[a, p] & group[b, p] & reachable_contact
-        edges.append(np.stack([node[a[ok], p], node[b[ok], p]], axis=1))
-    for p, q, differ in _posture_pairs(postures):
-        # members of one fold group: they differ only on legs folding in the leaf
-        same_group = (~differ[None, :] | folding).all(axis=1)
-        ok = group[:, p] & group[:, q] & same_group
-        ok &= table.sign[:, p] == table.sign[:, q]
-        idx = np.flatnonzero(ok)
-        edges.append(np.stack([node[idx, p], node[idx, q]], axis=1))
-    certain_edges = np.concatenate(edges)
-    certain, n_certain = _components(n * n_post, certain_edges, certified.ravel())
+    post_pairs = _posture_pairs(postures)
+    pq = np.array([(p, q) for p, q, _ in post_pairs], dtype=np.int64).reshape(-1, 2)
+    # per posture pair, the leaves where the two differ only on folding legs
+    same_leaf = (
+        np.stack([(~differ[None, :] | folding).all(axis=1) for _, _, differ in post_pairs])
+        if post_pairs
+        else np.zeros((0, n), dtype=bool)
+    )
+    pa, pb = np.ascontiguousarray(a, dtype=np.int64), np.ascontiguousarray(b, dtype=np.int64)
+    contact = (
+        np.zeros(0, dtype=bool)
+        if reachable_contact is None
+        else np.ascontiguousarray(reachable_contact, dtype=bool)
+    )
+    args = (
+        pa, pb, np.ascontiguousarray(table.sign), np.ascontiguousarray(table.status == IN),
+        np.ascontiguousarray(certified), np.ascontiguousarray(group), contact,
+        reachable_contact is not None, pq, same_leaf,
+    )  # fmt: skip
+    n_edges = _certain_edges(*args, np.zeros((0, 2), dtype=np.int64), False)
+    certain_edges = np.empty((n_edges, 2), dtype=np.int64)
+    _certain_edges(*args, certain_edges, True)
+    certain, n_certain = _edge_labels(
+        n * n_post, certain_edges[:, 0], certain_edges[:, 1], certified.ravel()
+    )
     certain_sign = np.zeros(n_certain, dtype=np.int8)
     labelled = certain >= 0
     certain_sign[certain[labelled]] = table.sign.ravel()[labelled]
@@ -221,45 +337,22 @@ def region_graph(
             for i, k in enumerate(combos[c]):
                 has[p, c] &= pieces[i][2][k][:, p]
 
-    def joined(
-        ra: NDArray[np.intp], pa: int, ca: int, rb: NDArray[np.intp], pb: int, cb: int
-    ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
-        """The pairs (ra, rb) whose sub-nodes exist and whose pieces overlap."""
-        keep = has[pa, ca][ra] & has[pb, cb][rb]
-        ra, rb = ra[keep], rb[keep]
-        ok = np.ones(ra.size, dtype=bool)
-        for i in range(n_legs):
-            lo_i, hi_i, _ = pieces[i]
-            ka, kb = combos[ca][i], combos[cb][i]
-            ok &= (lo_i[ka][ra, pa] <= hi_i[kb][rb, pb] + _TOL) & (
-                lo_i[kb][rb, pb] <= hi_i[ka][ra, pa] + _TOL
-            )
-        return ra[ok], rb[ok]
-
-    sub = np.arange(n * n_post * slots, dtype=np.int64).reshape(n, n_post, slots)
+    # pieces of every leg, stacked for the compiled pass: (legs, 2, n, P)
+    piece_lo = np.ascontiguousarray(np.stack([piece[0] for piece in pieces]))
+    piece_hi = np.ascontiguousarray(np.stack([piece[1] for piece in pieces]))
+    combo = np.asarray(combos, dtype=np.int64).reshape(slots, n_legs)
+    has_c = np.ascontiguousarray(has)
     possible = np.full((2, n * n_post * slots), -1, dtype=np.int64)
     counts = []
     for row, s in enumerate((1, -1)):
-        alive = table.may_hold(s)
-        edges = []
-        for p in range(n_post):
-            live = alive[a, p] & alive[b, p]
-            ia, ib = a[live], b[live]
-            for ca in range(slots):
-                for cb in range(slots):
-                    ja, jb = joined(ia, p, ca, ib, p, cb)
-                    edges.append(np.stack([sub[ja, p, ca], sub[jb, p, cb]], axis=1))
-        for p, q, differ in _posture_pairs(postures):
-            same_leaf = (~differ[None, :] | folding).all(axis=1)
-            rows = np.flatnonzero(alive[:, p] & alive[:, q] & same_leaf)
-            for cp in range(slots):
-                for cq in range(slots):
-                    jp, jq = joined(rows, p, cp, rows, q, cq)
-                    edges.append(np.stack([sub[jp, p, cp], sub[jq, q, cq]], axis=1))
+        alive = np.ascontiguousarray(table.may_hold(s))
         taken = alive[:, :, None] & has.transpose(2, 0, 1)
-        labels, count = _components(n * n_post * slots, np.concatenate(edges), taken.ravel())
+        labels, count = _possible_labels(
+            pa, pb, alive, has_c, piece_lo, piece_hi, combo, pq, same_leaf,
+            np.ascontiguousarray(taken.ravel()), _TOL,
+        )  # fmt: skip
         possible[row] = labels
-        counts.append(count)
+        counts.append(int(count))
     return RegionGraph(
         certain=certain.reshape(n, n_post),
         possible=possible.reshape(2, n, n_post * slots),

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError, ResolutionError
@@ -443,11 +444,11 @@ def _split(
         is_child = kept_keys[at] != finer.keys
     else:
         is_child = np.ones(len(finer), dtype=bool)
-    stacked = stack_tables([table.take(np.flatnonzero(~mask)), children[0]])
-    n_kept = int((~is_child).sum())
+    # one gather from the old rows and the children's
+    stacked = stack_tables([table, children[0]])
     order = np.empty(len(finer), dtype=np.intp)
-    order[~is_child] = np.arange(n_kept)
-    order[is_child] = n_kept + np.arange(int(is_child.sum()))
+    order[~is_child] = np.flatnonzero(~mask)
+    order[is_child] = len(mask) + np.arange(int(is_child.sum()))
     old_index = np.full(len(finer), -1, dtype=np.intp)
     old_index[~is_child] = np.flatnonzero(~mask)
     return finer, stacked.take(order), old_index
@@ -476,6 +477,75 @@ def _reachable_contact(
     return out
 
 
+@njit(cache=True, nogil=True)
+def _flow_labels(
+    label: NDArray[np.int64], pred: NDArray[np.int32], order: NDArray[np.intp]
+) -> None:  # pragma: no cover - compiled
+    """``label[i] = label[pred[i]]`` for the leaves of ``order``, in that order."""
+    for t in range(order.size):
+        i = order[t]
+        label[i] = label[pred[i]]
+
+
+@njit(cache=True, nogil=True)
+def _walk_back(
+    out: NDArray[np.bool_],
+    starts: NDArray[np.intp],
+    source: NDArray[np.int64],
+    pred: NDArray[np.int32],
+) -> None:  # pragma: no cover - compiled
+    """Mark each start and its predecessors up to a leaf of a part (included)."""
+    n = out.size
+    for t in range(starts.size):
+        i = starts[t]
+        while not out[i]:
+            out[i] = True
+            if source[i] >= 0:
+                break
+            i = pred[i]
+            if i < 0 or i >= n:
+                break
+
+
+@njit(cache=True, nogil=True)
+def _chain_edges(
+    pairs: NDArray[np.intp], through: NDArray[np.bool_], seeds: NDArray[np.intp], n: int
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
+    """Rows and columns of the edges of :func:`_necks`' graph: the pairs whose two
+    leaves are ``through`` (in the order of ``pairs``), then ``(n, seed)``."""
+    m = 0
+    for t in range(pairs.shape[0]):
+        if through[pairs[t, 0]] and through[pairs[t, 1]]:
+            m += 1
+    rows = np.empty(m + seeds.size, dtype=np.int64)
+    cols = np.empty(m + seeds.size, dtype=np.int64)
+    k = 0
+    for t in range(pairs.shape[0]):
+        if through[pairs[t, 0]] and through[pairs[t, 1]]:
+            rows[k] = pairs[t, 0]
+            cols[k] = pairs[t, 1]
+            k += 1
+    for t in range(seeds.size):
+        rows[m + t] = n
+        cols[m + t] = seeds[t]
+    return rows, cols
+
+
+@njit(cache=True, nogil=True)
+def _grown(
+    out: NDArray[np.bool_], pairs: NDArray[np.intp]
+) -> NDArray[np.bool_]:  # pragma: no cover - compiled
+    """``out`` and the leaves touching it (by ``pairs``)."""
+    grown = out.copy()
+    for t in range(pairs.shape[0]):
+        i, j = pairs[t, 0], pairs[t, 1]
+        if out[i]:
+            grown[j] = True
+        if out[j]:
+            grown[i] = True
+    return grown
+
+
 def _necks(
     pairs: NDArray[np.intp], gap: NDArray[np.bool_], source: NDArray[np.int64], slack: int
 ) -> NDArray[np.bool_]:
@@ -494,10 +564,10 @@ def _necks(
     out = np.zeros(n, dtype=bool)
     seeds = np.flatnonzero(source >= 0)
     through = gap | (source >= 0)
-    keep = through[pairs[:, 0]] & through[pairs[:, 1]]
-    a, b = pairs[keep, 0], pairs[keep, 1]
-    rows = np.concatenate([a, np.full(seeds.size, n)])
-    cols = np.concatenate([b, seeds])
+    # the pairs of leaves that both lie on some chain, then an edge from a node
+    # n to every seed
+    rows, cols = _chain_edges(pairs, through, seeds, n)
+    a, b = rows[: rows.size - seeds.size], cols[: cols.size - seeds.size]
     graph = coo_matrix(
         (np.ones(rows.size, dtype=np.int8), (rows, cols)), shape=(n + 1, n + 1)
     ).tocsr()
@@ -507,13 +577,11 @@ def _necks(
     reached = np.isfinite(dist[:n])
     hops = np.where(reached, dist[:n] - 1.0, np.inf)
     label = np.where(source >= 0, source, -1)
-    # labels flow from the seeds outward, one distance at a time
+    # labels flow from the seeds outward, one distance at a time (a leaf's
+    # predecessor is one step nearer: labelled before it in this order)
     order = np.flatnonzero(reached & (source < 0))
     order = order[np.argsort(hops[order], kind="stable")]
-    levels = hops[order]
-    cuts = np.flatnonzero(np.diff(levels)) + 1
-    for chunk in np.split(order, cuts):
-        label[chunk] = label[pred[chunk]]
+    _flow_labels(label, pred, order)
     meet = (label[a] >= 0) & (label[b] >= 0) & (label[a] != label[b])
     if not meet.any():
         return out
@@ -525,19 +593,10 @@ def _necks(
     np.minimum.at(shortest, pair_key, length)
     near = length <= shortest[pair_key] + slack
     # walk back from both ends of each kept contact to its parts
-    walk = np.unique(np.concatenate([a[near], b[near]]))
-    while walk.size:
-        out[walk] = True
-        walk = walk[source[walk] < 0]
-        walk = np.unique(pred[walk])
-        walk = walk[(walk >= 0) & (walk < n) & ~out[walk]]
+    _walk_back(out, np.concatenate([a[near], b[near]]), source, pred)
     # and the gap leaves touching the chains (parts that touch have chains of
     # their own leaves alone)
-    pa, pb = pairs[:, 0], pairs[:, 1]
-    grown = out.copy()
-    grown[pb[out[pa]]] = True
-    grown[pa[out[pb]]] = True
-    return grown & gap
+    return _grown(out, pairs) & gap
 
 
 def count_text(at_least: int, at_most: int | None, noun: str = "region") -> str:

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from .keys import KeyLayout
 
-__all__ = ["adjacent_pairs", "edge_components", "label_leaves"]
+__all__ = ["adjacent_pairs", "edge_components", "label_leaves", "remap_pairs"]
 
 
 @njit(cache=True, nogil=True)
@@ -178,11 +178,7 @@ def _pairs(
     directions: NDArray[np.int8],
     sources: NDArray[np.bool_],
     fresh: NDArray[np.bool_],
-    fill: bool,
-    counts: NDArray[np.int64],
-    out_a: NDArray[np.int64],
-    out_b: NDArray[np.int64],
-) -> None:  # pragma: no cover - compiled
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
     """Adjacent pairs of chosen leaves, each written once, by its finer leaf.
 
     A leaf's probe in the direction of an adjacent leaf at least as large lands
@@ -191,12 +187,20 @@ def _pairs(
     leaf; a pair of leaves of one level, found from both, is kept from the
     lower index. Only the ``sources`` probe, and a pair of two leaves that are
     not ``fresh`` is left out (a refined tree's pairs between kept leaves are
-    known). Without ``fill`` the pairs of each leaf are counted into
-    ``counts``; with it they are written from the offsets ``counts`` holds."""
+    known). One pass: the pairs go to arrays that grow by doubling."""
     n = keys.size
     n_dir = directions.shape[0]
     last = np.zeros(n_dir, dtype=np.int64)
     found = np.empty(n_dir, dtype=np.int64)
+    n_src = 0
+    for i in range(n):
+        if chosen[i] and sources[i]:
+            n_src += 1
+    # each pair is written once: about half the probe directions per leaf
+    cap = max(16, n_src * (n_dir // 2 + 1))
+    out_a = np.empty(cap, dtype=np.int64)
+    out_b = np.empty(cap, dtype=np.int64)
+    total = 0
     for i in range(n):
         if not chosen[i] or not sources[i]:
             continue
@@ -223,13 +227,18 @@ def _pairs(
             if not seen:
                 found[m] = j
                 m += 1
-        if fill:
-            start = counts[i]
-            for t in range(m):
-                out_a[start + t] = i
-                out_b[start + t] = found[t]
-        else:
-            counts[i] = m
+        if total + m > cap:
+            cap = max(2 * cap, total + m)
+            grown_a = np.empty(cap, dtype=np.int64)
+            grown_b = np.empty(cap, dtype=np.int64)
+            grown_a[:total] = out_a[:total]
+            grown_b[:total] = out_b[:total]
+            out_a, out_b = grown_a, grown_b
+        for t in range(m):
+            out_a[total + t] = i
+            out_b[total + t] = found[t]
+        total += m
+    return out_a[:total], out_b[:total]
 
 
 def adjacent_pairs(
@@ -253,15 +262,7 @@ def adjacent_pairs(
     every = np.ones(n, dtype=np.bool_)
     src = every if sources is None else sources
     new = every if fresh is None else fresh
-    counts = np.zeros(n, dtype=np.int64)
-    empty = np.zeros(0, dtype=np.int64)
-    _pairs(keys, levels, chosen, *args, directions, src, new, False, counts, empty, empty)
-    offsets = np.zeros(n, dtype=np.int64)
-    np.cumsum(counts[:-1], out=offsets[1:])
-    total = int(counts.sum())
-    a = np.empty(total, dtype=np.int64)
-    b = np.empty(total, dtype=np.int64)
-    _pairs(keys, levels, chosen, *args, directions, src, new, True, offsets, a, b)
+    a, b = _pairs(keys, levels, chosen, *args, directions, src, new)
     if known is not None and known.size:
         a = np.concatenate([a, known[:, 0]])
         b = np.concatenate([b, known[:, 1]])
@@ -296,6 +297,30 @@ def _sorted_pairs(
                 v -= 1
             out[v + 1, 1] = value
     return out
+
+
+@njit(cache=True, nogil=True)
+def remap_pairs(
+    pairs: NDArray[np.int64], new_of_old: NDArray[np.int64], sources: NDArray[np.bool_]
+) -> NDArray[np.int64]:  # pragma: no cover - compiled
+    """A coarser tree's pairs in a refined tree: the pairs of two kept leaves, by their
+    new indices (``new_of_old``, -1 for a split leaf), in the order given; the kept
+    leaf of a pair with a split one is marked in ``sources`` (it must probe)."""
+    m = pairs.shape[0]
+    out = np.empty((m, 2), dtype=np.int64)
+    k = 0
+    for t in range(m):
+        i = new_of_old[pairs[t, 0]]
+        j = new_of_old[pairs[t, 1]]
+        if i >= 0 and j >= 0:
+            out[k, 0] = i
+            out[k, 1] = j
+            k += 1
+        elif i >= 0:
+            sources[i] = True
+        elif j >= 0:
+            sources[j] = True
+    return out[:k]
 
 
 def _layout_arrays(

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 from ..types import Array
-from ._kernels import adjacent_pairs, edge_components, label_leaves
+from ._kernels import adjacent_pairs, edge_components, label_leaves, remap_pairs
 from .status import IN, status_mask
 from .tree import HyperTree, to_coordinates
 
@@ -99,7 +99,7 @@ def adjacency(
     pairs = adjacent_pairs(
         tree.keys, tree.levels, chosen, tree.layout, tree.periodic, directions(tree.ndim, c)
     )
-    return pairs.astype(np.intp)
+    return pairs.astype(np.intp, copy=False)
 
 
 def refined_adjacency(
@@ -154,11 +154,8 @@ def refined_adjacency(
     split = new_of_old < 0
     if (split & ~old_chosen).any():
         return adjacency(tree, status=status, connectivity=c)
-    ends = new_of_old[np.asarray(old_pairs, dtype=np.int64).reshape(-1, 2)]
-    both = (ends >= 0).all(axis=1)
-    touched = ends[~both].ravel()
     sources = ~kept
-    sources[touched[touched >= 0]] = True
+    known = remap_pairs(np.asarray(old_pairs, dtype=np.int64).reshape(-1, 2), new_of_old, sources)
     return adjacent_pairs(
         tree.keys,
         tree.levels,
@@ -168,8 +165,8 @@ def refined_adjacency(
         directions(tree.ndim, c),
         sources=sources,
         fresh=~kept,
-        known=ends[both],
-    ).astype(np.intp)
+        known=known,
+    ).astype(np.intp, copy=False)
 
 
 def components(

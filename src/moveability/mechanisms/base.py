@@ -24,13 +24,15 @@ from __future__ import annotations
 import copy
 import itertools
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
+from .. import intervals as iv
 from ..errors import InvalidParameterError
-from ..intervals import Interval
+from ..intervals import Interval, add_into, mul_into, sub_into
 from ..limits import INSIDE, JointLimit
 from ..types import Array
 from .constraints import ConstraintMargins, Constraints, Linkage
@@ -133,6 +135,9 @@ def round_down(value: float) -> float:
 def interval_det(rows: list[list[Interval]]) -> Interval:
     """Enclosure of the determinant of a square matrix of intervals (cofactor expansion).
 
+    Matrices of size 1 to 3 are expanded in compiled passes (:func:`_det_chunk`:
+    the same operations in the same order, so the same bounds).
+
     Examples
     --------
     >>> from moveability.intervals import Interval
@@ -141,12 +146,20 @@ def interval_det(rows: list[list[Interval]]) -> Interval:
     True
     """
     n = len(rows)
+    if 1 <= n <= 3:
+        return _compiled([iv.as_interval(x) for row in rows for x in row], _det_bounds)
+    return _interval_det(rows)
+
+
+def _interval_det(rows: list[list[Interval]]) -> Interval:
+    """:func:`interval_det` by recursion on Interval operations (any size)."""
+    n = len(rows)
     if n == 1:
         return rows[0][0]
     total: Interval | None = None
     for j in range(n):
         minor = [row[:j] + row[j + 1 :] for row in rows[1:]]
-        term = rows[0][j] * interval_det(minor)
+        term = rows[0][j] * _interval_det(minor)
         if total is None:
             total = term
         elif j % 2:
@@ -155,6 +168,141 @@ def interval_det(rows: list[list[Interval]]) -> Interval:
             total = total + term
     assert total is not None
     return total
+
+
+#: elements per pass of the compiled determinant kernels (their scratch stays in cache)
+_CHUNK = 2048
+
+
+def _compiled(items: list[Interval], kernel: Any) -> Interval:
+    """``kernel(lo, hi, out_lo, out_hi)`` over intervals broadcast together: their
+    bounds as tuples of flat read-only arrays (views where they can be: no stacked
+    copy), the result's bounds written into ``out``."""
+    shape = np.broadcast_shapes(*(x.lo.shape for x in items))
+    m = int(np.prod(shape, dtype=np.int64))
+
+    def flat(bound: Array) -> Array:
+        b = np.asarray(bound, dtype=np.float64)
+        b = np.ascontiguousarray(b if b.shape == shape else np.broadcast_to(b, shape))
+        view = b.reshape(-1).view()
+        view.flags.writeable = False  # one array type for every item
+        return view
+
+    lo = tuple(flat(x.lo) for x in items)
+    hi = tuple(flat(x.hi) for x in items)
+    out_lo, out_hi = np.empty(m), np.empty(m)
+    kernel(lo, hi, out_lo, out_hi)
+    return Interval(out_lo.reshape(shape), out_hi.reshape(shape))
+
+
+@njit(cache=True, nogil=True)
+def _det_chunk(
+    a_lo: Array, a_hi: Array, out_lo: Array, out_hi: Array, t_lo: Array, t_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """The determinants of a (k, k, w) stack of interval matrices, k <= 3, into
+    ``out`` (w,), as :func:`_interval_det` expands them (the first row's
+    cofactors, the terms alternately subtracted and added, each product
+    ``row[0][j] * minor``), one operation over the whole stack at a time;
+    ``t`` holds (2, w) scratch."""
+    k = a_lo.shape[0]
+    if k == 1:
+        out_lo[:] = a_lo[0, 0]
+        out_hi[:] = a_hi[0, 0]
+        return
+    if k == 2:
+        mul_into(a_lo[0, 0], a_hi[0, 0], a_lo[1, 1], a_hi[1, 1], out_lo, out_hi)
+        mul_into(a_lo[0, 1], a_hi[0, 1], a_lo[1, 0], a_hi[1, 0], t_lo[0], t_hi[0])
+        sub_into(out_lo, out_hi, t_lo[0], t_hi[0], out_lo, out_hi)
+        return
+    for j in range(3):
+        # the 2 x 2 minor of rows 1, 2 without column j: columns c0 < c1
+        c0 = 1 if j == 0 else 0
+        c1 = 1 if j == 2 else 2
+        mul_into(a_lo[1, c0], a_hi[1, c0], a_lo[2, c1], a_hi[2, c1], t_lo[0], t_hi[0])
+        mul_into(a_lo[1, c1], a_hi[1, c1], a_lo[2, c0], a_hi[2, c0], t_lo[1], t_hi[1])
+        sub_into(t_lo[0], t_hi[0], t_lo[1], t_hi[1], t_lo[0], t_hi[0])
+        if j == 0:
+            mul_into(a_lo[0, 0], a_hi[0, 0], t_lo[0], t_hi[0], out_lo, out_hi)
+            continue
+        mul_into(a_lo[0, j], a_hi[0, j], t_lo[0], t_hi[0], t_lo[1], t_hi[1])
+        if j == 1:
+            sub_into(out_lo, out_hi, t_lo[1], t_hi[1], out_lo, out_hi)
+        else:
+            add_into(out_lo, out_hi, t_lo[1], t_hi[1], out_lo, out_hi)
+
+
+@njit(cache=True, nogil=True)
+def _det_bounds(
+    lo: Any, hi: Any, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """:func:`_det_chunk` of the k x k matrices whose entries (row by row) are the
+    flat arrays of the tuples ``lo`` and ``hi``, chunk by chunk."""
+    k = 1 if len(lo) == 1 else (2 if len(lo) == 4 else 3)
+    m = out_lo.size
+    t_lo, t_hi = np.empty((2, _CHUNK)), np.empty((2, _CHUNK))
+    a_lo, a_hi = np.empty((k, k, _CHUNK)), np.empty((k, k, _CHUNK))
+    for s in range(0, m, _CHUNK):
+        e = min(s + _CHUNK, m)
+        if e - s < _CHUNK:
+            t_lo, t_hi = np.empty((2, e - s)), np.empty((2, e - s))
+            a_lo, a_hi = np.empty((k, k, e - s)), np.empty((k, k, e - s))
+        for r in range(k):
+            for c in range(k):
+                a_lo[r, c] = lo[r * k + c][s:e]
+                a_hi[r, c] = hi[r * k + c][s:e]
+        _det_chunk(a_lo, a_hi, out_lo[s:e], out_hi[s:e], t_lo, t_hi)
+
+
+@njit(cache=True, nogil=True)
+def _det_rate_bounds(
+    lo: Any, hi: Any, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """:meth:`Mechanism.det_a_rate` of flat arrays (tuples ``lo``, ``hi``), in
+    its order of operations, chunk by chunk. The arrays are: the rows (k x k),
+    ``d row / dX`` (leg, entry, axis: k x k x k), ``d row / dq`` (leg, entry: k x
+    k), the velocity (k) and the joint rates (k)."""
+    k = 1 if len(lo) == 5 else (2 if len(lo) == 20 else 3)
+    at_x = k * k
+    at_q = at_x + k * k * k
+    at_v = at_q + k * k
+    at_r = at_v + k
+    m = out_lo.size
+    term_lo, term_hi = np.empty(_CHUNK), np.empty(_CHUNK)
+    t_lo, t_hi = np.empty((2, _CHUNK)), np.empty((2, _CHUNK))
+    a_lo, a_hi = np.empty((k, k, _CHUNK)), np.empty((k, k, _CHUNK))
+    for s in range(0, m, _CHUNK):
+        e = min(s + _CHUNK, m)
+        if e - s < _CHUNK:
+            term_lo, term_hi = np.empty(e - s), np.empty(e - s)
+            t_lo, t_hi = np.empty((2, e - s)), np.empty((2, e - s))
+            a_lo, a_hi = np.empty((k, k, e - s)), np.empty((k, k, e - s))
+        o_lo, o_hi = out_lo[s:e], out_hi[s:e]
+        for i in range(k):
+            # the matrix with row i differentiated
+            for r in range(k):
+                if r == i:
+                    continue
+                for c in range(k):
+                    a_lo[r, c] = lo[r * k + c][s:e]
+                    a_hi[r, c] = hi[r * k + c][s:e]
+            for j in range(k):
+                q = at_q + i * k + j
+                mul_into(
+                    lo[q][s:e], hi[q][s:e], lo[at_r + i][s:e], hi[at_r + i][s:e],
+                    a_lo[i, j], a_hi[i, j],
+                )  # fmt: skip
+                for axis in range(k):
+                    x = at_x + (i * k + j) * k + axis
+                    mul_into(
+                        lo[x][s:e], hi[x][s:e], lo[at_v + axis][s:e], hi[at_v + axis][s:e],
+                        t_lo[0], t_hi[0],
+                    )  # fmt: skip
+                    add_into(a_lo[i, j], a_hi[i, j], t_lo[0], t_hi[0], a_lo[i, j], a_hi[i, j])
+            if i == 0:
+                _det_chunk(a_lo, a_hi, o_lo, o_hi, t_lo, t_hi)
+            else:
+                _det_chunk(a_lo, a_hi, term_lo, term_hi, t_lo, t_hi)
+                add_into(o_lo, o_hi, term_lo, term_hi, o_lo, o_hi)
 
 
 class Mechanism:
@@ -396,6 +544,16 @@ class Mechanism:
             return None
         rows, partials = known
         k = len(velocity)
+        if 1 <= k <= 3 and len(self.legs) == k:
+            # one compiled pass, the same operations in the same order as below
+            items = [iv.as_interval(x) for row in rows for x in row]
+            items += [
+                iv.as_interval(x) for along_x, _ in partials for entry in along_x for x in entry
+            ]
+            items += [iv.as_interval(x) for _, along_q in partials for x in along_q]
+            items += [iv.as_interval(v) for v in velocity]
+            items += [iv.as_interval(r) for r in joint_rates]
+            return _compiled(items, _det_rate_bounds)
         total: Interval | None = None
         for i in range(len(self.legs)):
             along_x, along_q = partials[i]

@@ -58,6 +58,12 @@ _THREE = ("1", "2", "3")
 _NEXT = (("1", "2"), ("2", "3"), ("3", "1"))
 
 
+def _trig(lo: Array, hi: Array) -> tuple[Interval, Interval]:
+    """Enclosures of the cosine and sine of phi over boxes of poses."""
+    phi = Interval(lo[:, 2], hi[:, 2])
+    return iv.cos(phi), iv.sin(phi)
+
+
 @dataclass(frozen=True)
 class RPRLeg:
     """A revolute-prismatic-revolute leg from ``base`` to the platform point ``platform``.
@@ -113,9 +119,10 @@ class RPRLeg:
         return -np.asarray(angles, dtype=np.float64)
 
     # ------------------------------------------------------------- boxes
-    def _target_boxes(self, lo: Array, hi: Array) -> tuple[Interval, Interval, Interval, Interval]:
-        phi = Interval(lo[:, 2], hi[:, 2])
-        c, s = iv.cos(phi), iv.sin(phi)
+    def _target_boxes(
+        self, lo: Array, hi: Array, trig: tuple[Interval, Interval] | None = None
+    ) -> tuple[Interval, Interval, Interval, Interval]:
+        c, s = _trig(lo, hi) if trig is None else trig
         bx, by = self.platform
         rbx = c * bx - s * by
         rby = s * bx + c * by
@@ -123,17 +130,25 @@ class RPRLeg:
         dy = Interval(lo[:, 1], hi[:, 1]) + rby - self.base[1]
         return dx, dy, rbx, rby
 
-    def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]:
-        """Enclosure of the row of A over boxes of poses."""
-        dx, dy, rbx, rby = self._target_boxes(lo, hi)
+    def a_row_boxes(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: Interval,
+        trig: tuple[Interval, Interval] | None = None,
+    ) -> list[Interval]:
+        """Enclosure of the row of A over boxes of poses (``trig``: the cosine and
+        sine of the boxes' phi, when already known)."""
+        dx, dy, rbx, rby = self._target_boxes(lo, hi, trig)
         px = Interval(lo[:, 0], hi[:, 0]) - self.base[0]
         py = Interval(lo[:, 1], hi[:, 1]) - self.base[1]
         return [dx, dy, rbx * py - rby * px]
 
-    def a_row_derivatives(self, lo: Array, hi: Array) -> list[list[Interval]]:
+    def a_row_derivatives(
+        self, lo: Array, hi: Array, trig: tuple[Interval, Interval] | None = None
+    ) -> list[list[Interval]]:
         """Enclosures of the derivatives of the row of A along x, y and phi over boxes."""
-        phi = Interval(lo[:, 2], hi[:, 2])
-        c, s = iv.cos(phi), iv.sin(phi)
+        c, s = _trig(lo, hi) if trig is None else trig
         bx, by = self.platform
         rbx = c * bx - s * by
         rby = s * bx + c * by
@@ -147,12 +162,16 @@ class RPRLeg:
         ]
 
     def row_partials(
-        self, lo: Array, hi: Array, angles: Interval
+        self,
+        lo: Array,
+        hi: Array,
+        angles: Interval,
+        trig: tuple[Interval, Interval] | None = None,
     ) -> tuple[list[list[Interval]], list[Interval]]:
         """Partial derivatives of the row of A: along x, y, phi (the row depends on the
         pose alone), and none along the length."""
         zero = iv.as_interval(np.zeros(lo.shape[0]))
-        return self.a_row_derivatives(lo, hi), [zero, zero, zero]
+        return self.a_row_derivatives(lo, hi, trig), [zero, zero, zero]
 
     def joint_gradient(self, lo: Array, hi: Array, branch: int, angles: Interval) -> list[Interval]:
         """``drho/dX = row / rho`` (``angles`` encloses rho)."""
@@ -268,13 +287,18 @@ class ThreeRPR(Mechanism):
         """Enclosure of det A over boxes: the rows depend on the pose only, so the
         mean-value form ``D(c) + sum_j dD/dx_j(box) (x_j - c_j)`` about the centre
         ``c`` encloses it too; the narrower of the two (intersected) is kept."""
-        rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.legs)]
+        # the legs share the cosine and sine of phi
+        trig = _trig(lo, hi)
+        rows = [
+            leg.a_row_boxes(lo, hi, angles[i], trig) for i, leg in enumerate(self.rpr_legs)
+        ]
         natural = interval_det(rows)
         mid = 0.5 * (lo + hi)
+        trig_mid = _trig(mid, mid)
         total = interval_det(
-            [leg.a_row_boxes(mid, mid, angles[i]) for i, leg in enumerate(self.legs)]
+            [leg.a_row_boxes(mid, mid, angles[i], trig_mid) for i, leg in enumerate(self.rpr_legs)]
         )
-        grads = [leg.a_row_derivatives(lo, hi) for leg in self.rpr_legs]
+        grads = [leg.a_row_derivatives(lo, hi, trig) for leg in self.rpr_legs]
         for axis in range(3):
             # d/dx_j of the determinant: one row differentiated at a time
             d = interval_det([grads[0][axis], rows[1], rows[2]])
@@ -282,6 +306,18 @@ class ThreeRPR(Mechanism):
             d = d + interval_det([rows[0], rows[1], grads[2][axis]])
             total = total + d * (Interval(lo[:, axis], hi[:, axis]) - mid[:, axis])
         return Interval(np.maximum(natural.lo, total.lo), np.minimum(natural.hi, total.hi))
+
+    def rows_and_partials(
+        self, lo: Array, hi: Array, angles: list[Interval]
+    ) -> tuple[list[list[Interval]], list[tuple[list[list[Interval]], list[Interval]]]]:
+        """The rows of A over boxes and their partial derivatives, as the base class
+        gives them, the legs sharing the cosine and sine of phi."""
+        trig = _trig(lo, hi)
+        rows = [leg.a_row_boxes(lo, hi, angles[i], trig) for i, leg in enumerate(self.rpr_legs)]
+        partials = [
+            leg.row_partials(lo, hi, angles[i], trig) for i, leg in enumerate(self.rpr_legs)
+        ]
+        return rows, partials
 
     def _strokes(self) -> dict[str, list[float]]:
         return {f"rho{i + 1}": [lim.lo, lim.hi] for i, lim in enumerate(self.limits)}
