@@ -33,10 +33,10 @@ arm). Branch 0 is ``+ alpha``, where ``dF/dtheta > 0``.
 ``g = t / 2la + (d^2 + la^2 - lb^2) / (2 la t)`` increases with ``d^2`` and is,
 in ``t``, monotone or convex with its minimum ``sqrt(d^2 + la^2 - lb^2) / la`` at
 ``t = sqrt(d^2 + la^2 - lb^2)``: over a box of poses its range is enclosed from
-the ranges of ``t`` and ``d^2`` (:meth:`DeltaLeg.reach`). Where that leaves
-the leg undecided, the leg's constraint is handed to a
-:class:`~moveability.mechanisms.constraint_leg.ConstraintLeg`, which
-certifies folds (and their connectivity) by root isolation.
+the ranges of ``t`` and ``d^2`` (:meth:`DeltaLeg.reach`). Folds (boxes with
+poses on both sides of ``|g| = 1``) are certified from the box's corners, and
+their connectivity along an axis on which ``g`` is monotone
+(:meth:`DeltaLeg._fold_axes`); a motion crosses them by :meth:`DeltaLeg.fold_path`.
 
 The rows of A are ``P + r u_i - E_i`` (``A t + B theta' = 0`` with ``t = P'``);
 B is diagonal, with terms ``la (s_i sin theta_i + z cos theta_i)`` (half
@@ -48,7 +48,7 @@ vectors: enclosures use an enclosure of ``sqrt(3)/2``, points its float.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -59,8 +59,9 @@ from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
 from ..types import Array
-from . import expressions as ex
 from .base import (
+    FOLD_INNER,
+    FOLD_OUTER,
     REACH_OUT,
     REACH_UNKNOWN,
     REGULAR,
@@ -69,7 +70,6 @@ from .base import (
     round_down,
     round_up,
 )
-from .constraint_leg import ConstraintLeg
 
 __all__ = ["Delta", "DeltaLeg"]
 
@@ -123,12 +123,8 @@ class DeltaLeg:
     arm: float
     rod: float
     joint: str
-    _inner: ConstraintLeg = field(init=False, repr=False)
 
     n_branches = 2
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "_inner", self._constraint_leg())
 
     # ------------------------------------------------------------ helpers
     @property
@@ -156,63 +152,6 @@ class DeltaLeg:
         s = x * ux + y * uy + self._offset()
         d = y * ux - x * uy
         return s, d, Interval(lo[:, 2], hi[:, 2])
-
-    def _constraint_leg(self) -> ConstraintLeg:
-        """The same constraint written for root isolation (folds)."""
-        (fx, fy), (ix, iy) = _unit(self.index)
-        la, lb = self.arm, self.rod
-        c_float = self.platform_radius - self.base_radius
-        c_iv = self._offset()
-        lb2_iv = iv.square(iv.as_interval(lb))
-
-        def consts(*values: Any) -> tuple[Any, Any, Any, Any]:
-            if ex.is_interval(*values):
-                return ix, iy, c_iv, lb2_iv
-            return fx, fy, c_float, lb * lb
-
-        def plane(x: Any, y: Any, c: Any, ux: Any, uy: Any) -> tuple[Any, Any]:
-            return x * ux + y * uy + c, y * ux - x * uy
-
-        def f(x: Any, y: Any, z: Any, q: Any) -> Any:
-            ux, uy, c, lb2 = consts(x, y, z, q)
-            s, d = plane(x, y, c, ux, uy)
-            return (
-                ex.power(s - la * ex.cos(q), 2)
-                + ex.power(z + la * ex.sin(q), 2)
-                + (ex.power(d, 2) - lb2)
-            )
-
-        def df_dq(x: Any, y: Any, z: Any, q: Any) -> Any:
-            ux, uy, c, _ = consts(x, y, z, q)
-            s, _ = plane(x, y, c, ux, uy)
-            return 2.0 * la * (s * ex.sin(q) + z * ex.cos(q))
-
-        def d2f_dq2(x: Any, y: Any, z: Any, q: Any) -> Any:
-            ux, uy, c, _ = consts(x, y, z, q)
-            s, _ = plane(x, y, c, ux, uy)
-            return 2.0 * la * (s * ex.cos(q) - z * ex.sin(q))
-
-        def df_dx(x: Any, y: Any, z: Any, q: Any) -> Any:
-            ux, uy, c, _ = consts(x, y, z, q)
-            s, d = plane(x, y, c, ux, uy)
-            return 2.0 * ((s - la * ex.cos(q)) * ux - d * uy)
-
-        def df_dy(x: Any, y: Any, z: Any, q: Any) -> Any:
-            ux, uy, c, _ = consts(x, y, z, q)
-            s, d = plane(x, y, c, ux, uy)
-            return 2.0 * ((s - la * ex.cos(q)) * uy + d * ux)
-
-        def df_dz(x: Any, y: Any, z: Any, q: Any) -> Any:
-            return 2.0 * (z + la * ex.sin(q))
-
-        return ConstraintLeg(
-            self.joint,
-            f=f,
-            df_dq=df_dq,
-            d2f_dq2=d2f_dq2,
-            df_dx=(df_dx, df_dy, df_dz),
-            closed_form=lambda points: self.angles(points),
-        )
 
     # ------------------------------------------------------------- points
     def elbow(self, angles: Array) -> Array:
@@ -315,56 +254,190 @@ class DeltaLeg:
         uw = w * cs - s * sn
         return ref + iv.arctan2(uw, us)
 
+    def _g_boxes(self, lo: Array, hi: Array) -> tuple[Array, Array, Array]:
+        """Bounds of ``g`` over boxes of poses, and a lower bound of ``t``."""
+        s, d, z = self._plane_boxes(lo, hi)
+        t = iv.sqrt(iv.square(s) + iv.square(z))
+        g_lo, g_hi = self._g_range(t, iv.square(d))
+        return g_lo, g_hi, t.lo
+
     def reach(self, lo: Array, hi: Array) -> LegReach:
         """Reachability and angle enclosures of the leg over boxes ``[lo, hi]`` (n, 3).
 
-        REGULAR and REACH_OUT from the range of ``g`` (see the module's notes);
-        the other boxes are handed to the root isolation of the same constraint,
-        which certifies folds.
+        From the range of ``g`` (see the module's notes): REACH_OUT where
+        ``|g| > 1`` on the whole box, REGULAR where ``|g| < 1`` and ``t > 0``.
+        FOLD_OUTER where ``g > -1`` on the box and two of its corners (or its
+        centre) have ``g < 1`` and ``g > 1``; FOLD_INNER likewise about ``-1``.
+        ``fold_connected`` by the monotone-axis argument of :meth:`_fold_axes`.
         """
         n = lo.shape[0]
         s, d, z = self._plane_boxes(lo, hi)
         t = iv.sqrt(iv.square(s) + iv.square(z))
         g_lo, g_hi = self._g_range(t, iv.square(d))
         out = (g_lo > 1.0) | (g_hi < -1.0)
-        regular = (t.lo > 0) & (g_lo > -1.0) & (g_hi < 1.0) & ~out
+        positive = t.lo > 0
+        regular = positive & (g_lo > -1.0) & (g_hi < 1.0) & ~out
+        # folds: poses of the box certainly on both sides of g = 1 (or -1)
+        maybe_outer = positive & (g_lo > -1.0) & ~regular & ~out
+        maybe_inner = positive & (g_hi < 1.0) & ~regular & ~out
+        below_one = np.zeros(n, dtype=bool)
+        above_one = np.zeros(n, dtype=bool)
+        below_minus = np.zeros(n, dtype=bool)
+        above_minus = np.zeros(n, dtype=bool)
+        todo = np.flatnonzero(maybe_outer | maybe_inner)
+        if todo.size:
+            for point in self._witness_points(lo[todo], hi[todo]):
+                p_lo, p_hi, _ = self._g_boxes(point, point)
+                below_one[todo] |= p_hi < 1.0
+                above_one[todo] |= p_lo > 1.0
+                below_minus[todo] |= p_hi < -1.0
+                above_minus[todo] |= p_lo > -1.0
+        fold_outer = maybe_outer & below_one & above_one
+        fold_inner = maybe_inner & above_minus & below_minus
         status = np.full(n, REACH_UNKNOWN, dtype=np.uint8)
+        status[fold_outer] = FOLD_OUTER
+        status[fold_inner] = FOLD_INNER
         status[regular] = REGULAR
         status[out] = REACH_OUT
+
         direction = self._direction(s, -z)
         alpha = iv.arccos(Interval(g_lo, g_hi))
         branches = [direction + alpha, direction - alpha]
-        hull = Interval(np.full(n, -_INF), np.full(n, _INF))
+        # both branches: theta + [-alpha, alpha] about a stretched leg (alpha near 0),
+        # theta + [alpha, 2 pi - alpha] about a folded one (alpha near pi)
+        two_pi = Interval(np.nextafter(2 * np.pi, 0.0), np.nextafter(2 * np.pi, np.inf))
+        about_zero = direction + Interval(-alpha.hi, alpha.hi)
+        about_pi = direction + iv.hull(Interval(alpha.lo), two_pi - Interval(alpha.lo))
+        hull = Interval(
+            np.where(fold_outer, about_zero.lo, np.where(fold_inner, about_pi.lo, -_INF)),
+            np.where(fold_outer, about_zero.hi, np.where(fold_inner, about_pi.hi, _INF)),
+        )
         fold_connected = np.zeros(n, dtype=bool)
-        rest = np.flatnonzero(status == REACH_UNKNOWN)
-        if rest.size:
-            inner = self._inner.reach(lo[rest], hi[rest])
-            status[rest] = inner.status
-            fold_connected[rest] = inner.fold_connected
-            for mine, theirs in zip(branches, inner.branches, strict=True):
-                mine.lo[rest] = theirs.lo
-                mine.hi[rest] = theirs.hi
-            hull.lo[rest] = inner.hull.lo
-            hull.hi[rest] = inner.hull.hi
-            unknown = status == REACH_UNKNOWN
-            hull.lo[unknown] = -_INF
-            hull.hi[unknown] = _INF
+        folds = np.flatnonzero(fold_outer | fold_inner)
+        if folds.size:
+            axis, _ = self._fold_axes(lo[folds], hi[folds], fold_outer[folds])
+            fold_connected[folds] = axis >= 0
         return LegReach(status=status, branches=branches, hull=hull, fold_connected=fold_connected)
 
-    # -------------------------------------------------------------- folds
-    def fold_waypoints(self, lo: Array, hi: Array, status: int) -> tuple[Array, Array]:
-        """Not available: plan through :meth:`fold_path`."""
-        return self._inner.fold_waypoints(lo, hi, status)
+    @staticmethod
+    def _witness_points(lo: Array, hi: Array) -> list[Array]:
+        """The corners and the centre of each box."""
+        out = [0.5 * lo + 0.5 * hi]
+        for corner in range(8):
+            pick = np.array([(corner >> j) & 1 for j in range(3)], dtype=bool)
+            out.append(np.where(pick, hi, lo))
+        return out
 
-    def fold_path(self, lo: Array, hi: Array, pose: Array) -> Array:
-        """Poses from ``pose`` to a fold pose of a fold-connected box (see
-        :meth:`ConstraintLeg.fold_path`)."""
-        return self._inner.fold_path(lo, hi, pose)
+    def _g_gradient(self, lo: Array, hi: Array) -> list[Interval]:
+        """Enclosures of ``dg/dx``, ``dg/dy``, ``dg/dz`` over boxes (where ``t > 0``).
+
+        ``dg/ds = s e / (2 la t^3)``, ``dg/dz = z e / (2 la t^3)`` with ``e = t^2 -
+        d^2 - la^2 + lb^2``, ``dg/dd = d / (la t)``; ``s`` and ``d`` turn with ``u``.
+        """
+        _, (ux, uy) = _unit(self.index)
+        la = self.arm
+        s, d, z = self._plane_boxes(lo, hi)
+        t2 = iv.square(s) + iv.square(z)
+        t = iv.sqrt(t2)
+        c = iv.square(iv.as_interval(la)) - iv.square(iv.as_interval(self.rod))
+        with _quiet():
+            scale = (t2 - iv.square(d) - c) / (t2 * t * (2.0 * la))
+            gs = s * scale
+            gd = d / (t * la)
+            return [gs * ux - gd * uy, gs * uy + gd * ux, z * scale]
+
+    def _fold_axes(
+        self, lo: Array, hi: Array, outer: NDArray[np.bool_]
+    ) -> tuple[NDArray[np.intp], NDArray[np.int8]]:
+        """For fold boxes (``outer``: about ``g = 1``, else about ``g = -1``): an axis
+        along which the leg's reach certifiably joins its fold, and the face.
+
+        With ``G = g`` (outer) or ``-g`` (inner), the reachable poses of the box are
+        those with ``G <= 1`` (``|g| < 1`` holds on the other side, and ``t > 0``).
+        If ``dG/dx_j > 0`` on the box and every pose of the face at the low end of
+        ``x_j`` is reachable, the reachable poses form segments along ``x_j`` from
+        that face (convex, wholly reachable): a connected set. A corner of the box
+        is certainly unreachable, so the segment through it meets ``G = 1``, where
+        the branches meet; they are continuous elsewhere. Every configuration of
+        the leg over the box thus joins every other. Returns ``axis`` (-1: none)
+        and ``direction`` (+1: the face at the low end, -1: at the high end).
+        """
+        n = lo.shape[0]
+        axis = np.full(n, -1, dtype=np.intp)
+        direction = np.zeros(n, dtype=np.int8)
+        grads = self._g_gradient(lo, hi)
+        for j in range(3):
+            g = grads[j]
+            finite = np.isfinite(g.lo) & np.isfinite(g.hi)
+            rising = finite & np.where(outer, g.lo > 0, g.hi < 0)  # dG/dx_j > 0
+            falling = finite & np.where(outer, g.hi < 0, g.lo > 0)
+            for sense, mask in ((1, rising), (-1, falling)):
+                mask = mask & (axis < 0)
+                if not mask.any():
+                    continue
+                f_lo, f_hi = lo.copy(), hi.copy()
+                face = lo[:, j] if sense > 0 else hi[:, j]
+                f_lo[:, j] = face
+                f_hi[:, j] = face
+                g_lo, g_hi, t_lo = self._g_boxes(f_lo, f_hi)
+                reachable = (t_lo > 0) & (g_lo > -1.0) & (g_hi < 1.0)
+                ok = mask & reachable
+                axis[ok] = j
+                direction[ok] = sense
+        return axis, direction
+
+    # -------------------------------------------------------------- folds
+    def _fold_box(self, lo: Array, hi: Array) -> tuple[int, int, bool]:
+        """Axis, face and kind (outer) of one fold-connected box."""
+        lo2 = np.asarray(lo, dtype=np.float64).reshape(1, 3)
+        hi2 = np.asarray(hi, dtype=np.float64).reshape(1, 3)
+        reach = self.reach(lo2, hi2)
+        if not reach.fold_connected[0]:
+            raise ValueError(f"leg {self.joint}: the box is not certified fold-connected")
+        outer = bool(reach.status[0] == FOLD_OUTER)
+        axis, direction = self._fold_axes(lo2, hi2, np.array([outer]))
+        return int(axis[0]), int(direction[0]), outer
+
+    def fold_waypoints(self, lo: Array, hi: Array, status: int) -> tuple[Array, Array]:
+        """Not available: the reachable part of a fold box need not be star-shaped;
+        plan through :meth:`fold_path`."""
+        raise NotImplementedError(
+            f"leg {self.joint}: no hub for a fold box; plan through fold_path instead"
+        )
 
     def fold_anchor(self, lo: Array, hi: Array, pose: Array) -> Array:
-        """``pose`` moved onto the box's reachable face (see
-        :meth:`ConstraintLeg.fold_anchor`)."""
-        return self._inner.fold_anchor(lo, hi, pose)
+        """``pose`` moved along the certified axis onto the box's reachable face (see
+        :meth:`_fold_axes`): the segment stays reachable, and so does the face."""
+        axis, direction, _ = self._fold_box(lo, hi)
+        out = np.array(pose, dtype=np.float64, copy=True).reshape(-1)
+        out[axis] = np.reshape(lo, -1)[axis] if direction > 0 else np.reshape(hi, -1)[axis]
+        return out
+
+    def fold_path(self, lo: Array, hi: Array, pose: Array) -> Array:
+        """Reachable poses from ``pose`` to a fold pose of a fold-connected box, shape
+        (4, 3): ``pose``, its anchor on the reachable face, the anchor of a corner
+        certified unreachable, and the last pose found reachable on the segment
+        from there to that corner (where the two branches meet, within rounding).
+        """
+        lo1 = np.asarray(lo, dtype=np.float64).reshape(-1)
+        hi1 = np.asarray(hi, dtype=np.float64).reshape(-1)
+        _, _, outer = self._fold_box(lo1, hi1)
+        x0 = np.asarray(pose, dtype=np.float64).reshape(-1)
+        corners = np.stack(self._witness_points(lo1[None, :], hi1[None, :]))[:, 0, :]
+        g_lo, g_hi, _ = self._g_boxes(corners, corners)
+        beyond = g_lo > 1.0 if outer else g_hi < -1.0
+        target = corners[int(np.flatnonzero(beyond)[0])]
+        a0 = self.fold_anchor(lo1, hi1, x0)
+        a1 = self.fold_anchor(lo1, hi1, target)
+        t_in, t_out = 0.0, 1.0
+        for _ in range(60):
+            mid = 0.5 * (t_in + t_out)
+            point = (a1 + mid * (target - a1))[None, :]
+            if np.isfinite(self.angles(point)).all():
+                t_in = mid
+            else:
+                t_out = mid
+        return np.stack([x0, a0, a1, a1 + t_in * (target - a1)])
 
 
 def _length(name: str, value: object) -> float:
