@@ -67,6 +67,7 @@ from .base import (
     REGULAR,
     LegReach,
     Mechanism,
+    interval_det,
     round_down,
     round_up,
 )
@@ -219,6 +220,38 @@ class DeltaLeg:
             Interval(lo[:, 1], hi[:, 1]) + h * uy,
             Interval(lo[:, 2], hi[:, 2]) + iv.sin(angles) * self.arm,
         ]
+
+    def centre_boxes(self, angles: Interval) -> list[Interval]:
+        """Enclosure of the sphere centre ``E(theta) - r u`` (the platform joint lies
+        on the sphere of radius ``lb`` about it; the platform's centre on the same
+        sphere about it shifted by ``-r u``), over joint enclosures."""
+        _, (ux, uy) = _unit(self.index)
+        h = iv.cos(angles) * self.arm - self._offset()
+        return [h * ux, h * uy, -(iv.sin(angles) * self.arm)]
+
+    def row_partials(
+        self, lo: Array, hi: Array, angles: Interval
+    ) -> tuple[list[list[Interval]], list[Interval]]:
+        """Partial derivatives of the row of A, ``P + (r - R - la cos theta) u +
+        la sin theta e_z``, over boxes: the identity along the pose, ``la (sin theta
+        u + cos theta e_z)`` along the joint."""
+        n = lo.shape[0]
+        one, zero = iv.as_interval(np.ones(n)), iv.as_interval(np.zeros(n))
+        _, (ux, uy) = _unit(self.index)
+        sin_a = iv.sin(angles) * self.arm
+        return (
+            [[one, zero, zero], [zero, one, zero], [zero, zero, one]],
+            [sin_a * ux, sin_a * uy, iv.cos(angles) * self.arm],
+        )
+
+    def joint_gradient(self, lo: Array, hi: Array, branch: int, angles: Interval) -> list[Interval]:
+        """``dtheta/dP`` over boxes (``angles`` the branch's enclosure): the
+        constraint differentiated, ``-row / (la (s sin theta + z cos theta))``;
+        unbounded where the serial term may vanish."""
+        s, _, z = self._plane_boxes(lo, hi)
+        den = (s * iv.sin(angles) + z * iv.cos(angles)) * self.arm
+        with _quiet():
+            return [-(r / den) for r in self.a_row_boxes(lo, hi, angles)]
 
     def _g_range(self, t: Interval, d2: Interval) -> tuple[Array, Array]:
         """Bounds of ``g(t, d^2)`` for ``t`` in ``[t.lo, t.hi]`` and ``d^2`` in ``d2``."""
@@ -530,6 +563,21 @@ class Delta(Mechanism):
             np.array([round_down(v) for v in lo - pad]),
             np.array([round_up(v) for v in hi + pad]),
         )
+
+    def det_a_boxes(
+        self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
+    ) -> Interval:
+        """Enclosure of det A over boxes: the rows stacked, intersected with
+        ``(P - c_1) . ((c_1 - c_2) x (c_1 - c_3))`` (rows subtracted; ``c_i`` the
+        sphere centres, which depend on the joints only: the pose occurs once)."""
+        rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.delta_legs)]
+        natural = interval_det(rows)
+        c = [leg.centre_boxes(angles[i]) for i, leg in enumerate(self.delta_legs)]
+        first = [Interval(lo[:, k], hi[:, k]) - c[0][k] for k in range(3)]
+        second = [c[0][k] - c[1][k] for k in range(3)]
+        third = [c[0][k] - c[2][k] for k in range(3)]
+        alt = interval_det([first, second, third])
+        return Interval(np.maximum(natural.lo, alt.lo), np.minimum(natural.hi, alt.hi))
 
     def to_spec(self) -> dict[str, object]:
         """The spec mapping of this mechanism (see :func:`~.registry.load_spec`)."""
