@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from moveability import analyze
+from moveability import analyze, plan_motion
 from moveability.errors import InvalidParameterError
 from moveability.intervals import Interval
 from moveability.limits import JointLimit
@@ -372,3 +372,37 @@ def test_the_example_runs_and_finds_both_sides():
     assert sorted(r.sign for r in result.regions) == [-1, 1]
     inner, outer = result.workspace["volume"]
     assert 0 < inner < outer
+
+
+def test_plans_change_posture_at_a_fold(case):
+    """Motions inside a region that meets several postures: valid configurations,
+    one sign of det A, joints within the limits, and the posture changed only where
+    the two branches of a leg meet."""
+    m, ref, result = case
+    regions = [r for r in result.regions if len(r.postures) > 1]
+    if not regions:
+        pytest.skip("no certified region meets two postures at this precision")
+    region = regions[0]
+    rng = np.random.default_rng(6)
+    lo, hi = m.pose_box()
+    poses = lo + (hi - lo) * rng.random((3000, 3))
+    located = result.locate(poses)["points"]
+    inside = poses[[p["regions"][str(region.id)] is True for p in located]]
+    changed = 0
+    for _ in range(12):
+        a, b = inside[rng.integers(len(inside), size=2)]
+        motion = plan_motion(result, [a, b])
+        path = np.array([s["pose"] for s in motion["path"]])
+        joints = np.array([s["joints"] for s in motion["path"]])
+        names = [s["posture"] for s in motion["path"]]
+        assert np.abs(m.constraints(path, joints)).max() < 1e-9 * max(ref.lb, 1.0) ** 2
+        assert (np.sign(ref.det_a(path, joints)) == region.sign).all()
+        assert ((joints >= ref.limits[:, 0] - 1e-9) & (joints <= ref.limits[:, 1] + 1e-9)).all()
+        for k in range(len(names) - 1):
+            if names[k] != names[k + 1]:
+                changed += 1
+                assert np.allclose(path[k], path[k + 1])
+                assert np.abs(joints[k] - joints[k + 1]).max() < 1e-4
+        if changed >= 2:
+            break
+    assert changed >= 1
