@@ -341,6 +341,9 @@ def test_volumes_bracket_a_monte_carlo_estimate(case):
     margin = 4 * np.sqrt(inside.mean() * (1 - inside.mean()) / n) * volume + 1e-9
     inner, outer = result.workspace["volume"]
     assert inner - margin <= estimate <= outer + margin
+    # no pose of the reference's workspace is said to lie outside it
+    answers = result.locate(poses[inside])["points"]
+    assert all(point["workspace"] is not False for point in answers)
     # per region: the reference regions that its located poses fall in
     labels = [ref.regions_of(p) for p in poses]
     ok = np.array([lab is not None for lab in labels])

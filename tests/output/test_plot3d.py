@@ -262,7 +262,7 @@ def test_3d_titles_have_three_digits_and_legends_are_opaque():
 
 
 def test_delta_slices_cut_heights(tmp_path):
-    """A translational mechanism (x, y, z): slices across z, by default four across
+    """A translational mechanism (x, y, z): slices across z, by default four through
     the leaves that may hold W, titled with the height; the CLI takes --z, not --phi."""
     delta = analyze("examples/delta.toml", precision=0.1, resolve=False)
     fig = plot_slices(delta)
@@ -272,6 +272,9 @@ def test_delta_slices_cut_heights(tmp_path):
     assert heights == sorted(heights)
     lo, hi = delta.tree.lo[2], delta.tree.hi[2]
     assert lo < heights[0] and heights[-1] < hi
+    # every default slice cuts W's leaves (the Delta's W has a gap about z = 0)
+    for ax in fig.axes[:4]:
+        assert any(len(c.get_paths()) for c in ax.collections if c.get_gid())
     plt.close(fig)
     fig = plot_slices(delta, phis=[-0.8])
     assert fig.axes[0].get_title() == "z = -0.8"

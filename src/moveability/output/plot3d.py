@@ -85,15 +85,21 @@ def _wrap(result: Analysis, value: float) -> float:
 
 def _default_cuts(result: Analysis) -> Array:
     """Four values of the third axis: the default angles when it is periodic, else
-    the middles of four equal parts of the range of the leaves that may hold W."""
+    the heights that cut the volume of the leaves that may hold W at 1/8, 3/8, 5/8
+    and 7/8 (a workspace in two parts, above and below, gets slices in both)."""
     if 2 in result.mechanism.periodic_axes:
         return np.asarray(DEFAULT_PHIS, dtype=np.float64)
     leaves = result.tree.leaves()
     maybe_w = leaves.status != OUT
     if not maybe_w.any():
         maybe_w = np.ones_like(maybe_w)
-    low, high = float(leaves.lo[maybe_w, 2].min()), float(leaves.hi[maybe_w, 2].max())
-    return np.asarray(low + (np.arange(4) + 0.5) / 4.0 * (high - low), dtype=np.float64)
+    lo, hi = leaves.lo[maybe_w], leaves.hi[maybe_w]
+    volume = np.prod(hi - lo, axis=1)
+    centre = 0.5 * (lo[:, 2] + hi[:, 2])
+    order = np.argsort(centre, kind="stable")
+    cumulative = np.cumsum(volume[order]) / volume.sum()
+    quantiles = (np.arange(4) + 0.5) / 4.0
+    return np.asarray(np.interp(quantiles, cumulative, centre[order]), dtype=np.float64)
 
 
 def _in_slice(lo: Array, hi: Array, value: float, top: float) -> NDArray[np.bool_]:
@@ -141,7 +147,7 @@ def plot_slices(
     phis : array_like, optional
         Values of the third axis at the slices: angles in radians (periodic angles
         are wrapped), or heights in length units for a translational mechanism
-        (by default the middles of four equal parts of the height of W's leaves);
+        (by default four heights spread over the volume of W's leaves);
         :data:`DEFAULT_PHIS` by default.
     axes : sequence of Axes, optional
         One per angle; new panels by default.
