@@ -409,3 +409,37 @@ def test_plans_change_posture_at_a_fold(case):
         if changed >= 2:
             break
     assert changed >= 1
+
+
+def test_fold_flows_keep_the_reach_and_enclose_the_joint_rates():
+    m = _delta(*SYMMETRIC[:2])
+    rng = np.random.default_rng(7)
+    lo, hi = m.pose_box()
+    centre = lo + (hi - lo) * rng.random((6000, 3))
+    half = 0.5 * rng.random((6000, 1))
+    blo, bhi = centre - half, centre + half
+    checked = kept = 0
+    for leg in m.legs:
+        reach = leg.reach(blo, bhi)
+        folds = np.flatnonzero((reach.status == FOLD_OUTER) | (reach.status == FOLD_INNER))
+        flo, fhi = blo[folds], bhi[folds]
+        for direction in np.concatenate([np.eye(3), -np.eye(3), [[1.0, -1.0, 1.0]]]):
+            velocity = [Interval(np.full(folds.size, v)) for v in direction]
+            for branch in (0, 1):
+                keeps, rate = leg.fold_flow(flo, fhi, reach.status[folds], branch, velocity)
+                kept += int(keeps.sum())
+                for _ in range(5):
+                    p = flo + (fhi - flo) * rng.random(flo.shape)
+                    q0 = leg.angles(p)[:, branch]
+                    step = 1e-6
+                    moved = p + step * direction
+                    q1 = leg.angles(moved)[:, branch]
+                    inside = ((moved >= flo) & (moved <= fhi)).all(axis=1) & np.isfinite(q0)
+                    # a kept flow leaves no reachable pose unreachable
+                    assert np.isfinite(q1[inside & keeps]).all()
+                    ok = inside & np.isfinite(q1)
+                    d = np.angle(np.exp(1j * (q1[ok] - q0[ok]))) / step
+                    slack = 1e-3 * (1.0 + np.abs(d))
+                    assert ((d >= rate.lo[ok] - slack) & (d <= rate.hi[ok] + slack)).all()
+                    checked += int(ok.sum())
+    assert checked > 1000 and kept > 100

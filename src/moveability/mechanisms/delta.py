@@ -419,6 +419,57 @@ class DeltaLeg:
                 direction[ok] = sense
         return axis, direction
 
+    def fold_flow(
+        self,
+        lo: Array,
+        hi: Array,
+        status: NDArray[np.uint8],
+        branch: int,
+        velocity: list[Interval],
+        cache: dict[str, Any] | None = None,
+    ) -> tuple[NDArray[np.bool_], Interval]:
+        """Over boxes where the leg may fold (``status`` FOLD_OUTER or FOLD_INNER):
+        whether moving a pose at ``velocity`` (one enclosure per pose axis) keeps it
+        reachable, and an enclosure of the rate of the joint of ``branch``.
+
+        The pose stays reachable where ``g`` does not grow (outer fold; ``g > -1``
+        holds over the box) or does not fall (inner fold). The joint is
+        ``theta = atan2(w, s) + sign alpha`` with ``cos alpha = g``: its rate is
+        ``(s w' - w s') / t^2 - sign g' / sin alpha``, unbounded at the fold, where
+        ``sin alpha`` falls to 0: the enclosure keeps the lower bound ``1 / max sin
+        alpha`` of ``1 / sin alpha``. ``cache`` (one per boxes and branch) keeps what
+        does not depend on the velocity.
+        """
+        terms = None if cache is None else cache.get("fold")
+        if terms is None:
+            terms = self._fold_terms(lo, hi)
+            if cache is not None:
+                cache["fold"] = terms
+        grads, s, w, t2, inverse = terms
+        _, (ux, uy) = _unit(self.index)
+        v = velocity
+        with _quiet():
+            g_rate = grads[0] * v[0] + grads[1] * v[1] + grads[2] * v[2]
+            s_rate = v[0] * ux + v[1] * uy
+            turning = (s * (-v[2]) - w * s_rate) / t2
+            alpha_rate = -(g_rate * inverse)
+            rate = turning + alpha_rate if branch == 0 else turning - alpha_rate
+        outer = status == FOLD_OUTER
+        inner = status == FOLD_INNER
+        keeps = (outer & (g_rate.hi <= 0)) | (inner & (g_rate.lo >= 0))
+        return keeps, rate
+
+    def _fold_terms(self, lo: Array, hi: Array) -> tuple[Any, ...]:
+        """What :meth:`fold_flow` needs of the boxes alone, for every velocity."""
+        s, _, z = self._plane_boxes(lo, hi)
+        t2 = iv.square(s) + iv.square(z)
+        g_lo, g_hi, _ = self._g_boxes(lo, hi)
+        sin_max = iv.sin(iv.arccos(Interval(g_lo, g_hi))).hi
+        with _quiet():
+            low = np.where(sin_max > 0, np.nextafter(1.0 / np.maximum(sin_max, 1e-300), 0.0), 0.0)
+        inverse = Interval(low, np.full(lo.shape[0], _INF))
+        return self._g_gradient(lo, hi), s, -z, t2, inverse
+
     # -------------------------------------------------------------- folds
     def _fold_box(self, lo: Array, hi: Array) -> tuple[int, int, bool]:
         """Axis, face and kind (outer) of one fold-connected box."""
