@@ -38,6 +38,8 @@ def main() -> None:
     rpr = analyze(load_spec(EXAMPLES / "three-rpr.toml"), precision=(0.8, 0.8, 0.1))
     save(figure("slices", rpr, phis=[-0.7853981633974483, 0.7853981633974483]),
          "three-rpr-slices.png")  # fmt: skip
+    delta = analyze(load_spec(EXAMPLES / "delta.toml"), precision=0.05, resolve=False)
+    save(figure("slices", delta), "delta-slices.png")
 
 
 if __name__ == "__main__":

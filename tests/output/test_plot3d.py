@@ -259,3 +259,38 @@ def test_3d_titles_have_three_digits_and_legends_are_opaque():
         legends = fig.legends + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
         assert legends and all(leg.get_frame().get_alpha() == 1.0 for leg in legends)
     assert "0.667, 0.667, 0.349" in plot_slices(odd).get_suptitle()
+
+
+def test_delta_slices_cut_heights(tmp_path):
+    """A translational mechanism (x, y, z): slices across z, by default four through
+    the leaves that may hold W, titled with the height; the CLI takes --z, not --phi."""
+    delta = analyze("examples/delta.toml", precision=0.1, resolve=False)
+    fig = plot_slices(delta)
+    titles = [ax.get_title() for ax in fig.axes[:4]]
+    assert all(t.startswith("z = ") for t in titles)
+    heights = [float(t[4:]) for t in titles]
+    assert heights == sorted(heights)
+    lo, hi = delta.tree.lo[2], delta.tree.hi[2]
+    assert lo < heights[0] and heights[-1] < hi
+    # every default slice cuts W's leaves (the Delta's W has a gap about z = 0)
+    for ax in fig.axes[:4]:
+        assert any(len(c.get_paths()) for c in ax.collections if c.get_gid())
+    plt.close(fig)
+    fig = plot_slices(delta, phis=[-0.8])
+    assert fig.axes[0].get_title() == "z = -0.8"
+    plt.close(fig)
+    fig = plot_regions_3d(delta)
+    assert fig.axes[0].get_zlabel() == "z (length units)"
+    plt.close(fig)
+    runner = CliRunner()
+    out = tmp_path / "slices.png"
+    args = ["plot", "examples/delta.toml", "--figure", "slices", "--out", str(out), "-p", "0.1"]
+    done = runner.invoke(main, [*args, "--no-resolve", "--z", "-0.8", "--z", "0.5"])
+    assert done.exit_code == 0, done.output
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bad = runner.invoke(main, [*args, "--overwrite", "--phi", "10"])
+    assert bad.exit_code == 2 and "--z" in bad.output
+    bad = runner.invoke(
+        main, ["plot", SPEC, "--figure", "slices", "--z", "1", "--out", str(tmp_path / "x.png")]
+    )
+    assert bad.exit_code == 2 and "--phi" in bad.output

@@ -128,8 +128,12 @@ class _Fold:
         if self.leg is None:
             hub, point = self.hub + self.offset, self.point + self.offset
             return [(hub, pu), (point, pu), (point, pv), (hub, pv)], hub
-        fold = self.leg.fold_path(self.lo, self.hi, at - self.offset)[-1] + self.offset
-        return [(fold, pu), (fold, pv), (at, pv)], at
+        # the path's poses are reachable and joined by reachable segments; its last
+        # one is a fold pose: there and back, the posture changed at the fold
+        path = self.leg.fold_path(self.lo, self.hi, at - self.offset) + self.offset
+        there = [(pose, pu) for pose in path[1:]]
+        back = [(pose, pv) for pose in path[-2::-1]]
+        return [*there, (path[-1], pv), *back], at
 
 
 def _waypoints(

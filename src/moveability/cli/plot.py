@@ -68,6 +68,16 @@ def _check_figure(name: str, mechanism: object) -> None:
         )
 
 
+def _check_cuts(mechanism: Any, phis: tuple[float, ...], heights: tuple[float, ...]) -> None:
+    """Refuse angles for slices across a height, and heights for slices across an angle."""
+    angle = 2 in tuple(getattr(mechanism, "periodic_axes", ()))
+    third = tuple(mechanism.pose_names)[2]
+    if phis and not angle:
+        raise InputError(f"invalid --phi: the slices cut {third}, a height: give --z")
+    if heights and angle:
+        raise InputError(f"invalid --z: the slices cut {third}, an angle: give --phi")
+
+
 @click.command("plot")
 @options.spec_argument
 @click.option(
@@ -101,6 +111,16 @@ def _check_figure(name: str, mechanism: object) -> None:
     help="With --figure slices: an angle of the slices in degrees; repeat for several "
     "(default -135, -45, 45, 135).",
 )
+@click.option(
+    "--z",
+    "heights",
+    multiple=True,
+    type=float,
+    metavar="Z",
+    help="With --figure slices, for a mechanism whose third pose axis is a height (the "
+    "Delta): a height of the slices in length units; repeat for several (default: four "
+    "across the workspace).",
+)
 @click.option("--animate", is_flag=True, help="With --figure path: write an animated GIF.")
 @click.option("--overwrite", is_flag=True, help="Replace --out if it exists.")
 @options.precision_option
@@ -112,6 +132,7 @@ def plot_command(
     pose: str | None,
     points: str | None,
     phis: tuple[float, ...],
+    heights: tuple[float, ...],
     animate: bool,
     overwrite: bool,
     precision: float,
@@ -126,6 +147,10 @@ def plot_command(
         raise InputError("invalid --phi: only the slices figure takes angles")
     if not all(np.isfinite(phis)):
         raise InputError(f"invalid --phi: expected finite angles, got {list(phis)!r}")
+    if heights and name != "slices":
+        raise InputError("invalid --z: only the slices figure takes heights")
+    if not all(np.isfinite(heights)):
+        raise InputError(f"invalid --z: expected finite heights, got {list(heights)!r}")
     if pose is not None and name != "postures":
         raise InputError("invalid --pose: only the postures figure takes a pose")
     if points is not None and name != "path":
@@ -137,6 +162,8 @@ def plot_command(
         saved = running.open_analysis(spec, precision) if running.is_saved(spec) else None
         mechanism = saved.mechanism if saved is not None else running.load_mechanism(spec)
         _check_figure(name, mechanism)
+        if name == "slices":
+            _check_cuts(mechanism, phis, heights)
         if at is not None:
             _check_pose(at, mechanism)
         poses = None
@@ -167,8 +194,8 @@ def plot_command(
                             temporary, dpi=110, bbox_inches="tight"
                         )
                 else:
-                    angles = np.radians(phis) if phis else None
-                    fig = figure(name, result, pose=at, phis=angles)
+                    cuts = np.radians(phis) if phis else (np.array(heights) if heights else None)
+                    fig = figure(name, result, pose=at, phis=cuts)
                     fig.savefig(temporary, dpi=110, bbox_inches="tight")
         except PlanningError as error:
             click.echo(f"Error: no motion: {error}", err=True)

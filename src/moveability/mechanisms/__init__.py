@@ -12,6 +12,7 @@ from typing import Any
 from . import registry
 from .base import Mechanism
 from .biglide import Biglide
+from .delta import Delta
 from .five_bar import FiveBar
 from .registry import MECHANISMS, from_spec, load_spec
 from .three_rpr import ThreeRPR
@@ -21,6 +22,7 @@ __all__ = [
     "MECHANISMS",
     "Biglide",
     "CustomMechanism",
+    "Delta",
     "FiveBar",
     "Mechanism",
     "ThreeRPR",
@@ -35,4 +37,3 @@ def __getattr__(name: str) -> Any:
     if name == "CustomMechanism":
         return registry.mechanism_class("custom")
     raise AttributeError(name)
-

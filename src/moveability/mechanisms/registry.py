@@ -91,6 +91,13 @@ MECHANISMS: dict[str, Registered] = {
             shapes=True,
         ),
     ),
+    "delta": Registered(
+        "delta:Delta",
+        MechanismSchema(
+            parameters=("base_radius", "platform_radius", "arm", "rod"),
+            joints=tuple(f"theta{i}" for i in _THREE),
+        ),
+    ),
     "custom": Registered("custom:CustomMechanism", None, extra="custom"),
 }
 

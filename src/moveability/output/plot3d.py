@@ -1,7 +1,9 @@
-"""Figures of an analysis with three pose axes (x, y, phi): slices and a 3-D view.
+"""Figures of an analysis with three pose axes (x, y, phi), or (x, y, z) for a
+translational mechanism such as the Delta: slices and a 3-D view.
 
 With three pose axes the regions are solids. :func:`plot_slices` cuts them at
-chosen values of the third axis and draws the (x, y) slices;
+chosen values of the third axis (an orientation, or a height) and draws the
+(x, y) slices;
 :func:`plot_regions_3d` draws the outer surface of each region's certified
 part, found by :func:`moveability.hypertree.topology.boundary_faces`. Colours and legends follow
 :mod:`moveability.output.plot`.
@@ -81,6 +83,25 @@ def _wrap(result: Analysis, value: float) -> float:
     return float(value)
 
 
+def _default_cuts(result: Analysis) -> Array:
+    """Four values of the third axis: the default angles when it is periodic, else
+    the heights that cut the volume of the leaves that may hold W at 1/8, 3/8, 5/8
+    and 7/8 (a workspace in two parts, above and below, gets slices in both)."""
+    if 2 in result.mechanism.periodic_axes:
+        return np.asarray(DEFAULT_PHIS, dtype=np.float64)
+    leaves = result.tree.leaves()
+    maybe_w = leaves.status != OUT
+    if not maybe_w.any():
+        maybe_w = np.ones_like(maybe_w)
+    lo, hi = leaves.lo[maybe_w], leaves.hi[maybe_w]
+    volume = np.prod(hi - lo, axis=1)
+    centre = 0.5 * (lo[:, 2] + hi[:, 2])
+    order = np.argsort(centre, kind="stable")
+    cumulative = np.cumsum(volume[order]) / volume.sum()
+    quantiles = (np.arange(4) + 0.5) / 4.0
+    return np.asarray(np.interp(quantiles, cumulative, centre[order]), dtype=np.float64)
+
+
 def _in_slice(lo: Array, hi: Array, value: float, top: float) -> NDArray[np.bool_]:
     """Leaves whose third-axis range holds ``value`` (half-open, except at the top)."""
     return (lo[:, 2] <= value) & ((value < hi[:, 2]) | ((hi[:, 2] == top) & (value == top)))
@@ -112,7 +133,8 @@ def _outline(ax: Axes, result: Analysis, value: float) -> Any:
 def plot_slices(
     result: Analysis, phis: ArrayLike | None = None, axes: Sequence[Axes] | None = None
 ) -> Figure:
-    """The (x, y) slices of the regions at chosen orientations, one panel each.
+    """The (x, y) slices of the regions at chosen values of the third axis (orientations
+    phi, or heights z), one panel each.
 
     Each panel draws the leaves whose third-axis range holds the angle: a
     region's certified part solid, where it may extend light, undecided leaves
@@ -123,7 +145,9 @@ def plot_slices(
     result : Analysis
         An analysis with three pose axes (x, y, phi).
     phis : array_like, optional
-        Angles of the slices in radians (periodic angles are wrapped);
+        Values of the third axis at the slices: angles in radians (periodic angles
+        are wrapped), or heights in length units for a translational mechanism
+        (by default four heights spread over the volume of W's leaves);
         :data:`DEFAULT_PHIS` by default.
     axes : sequence of Axes, optional
         One per angle; new panels by default.
@@ -141,9 +165,12 @@ def plot_slices(
     ['phi = 0\N{DEGREE SIGN}', 'phi = 28.65\N{DEGREE SIGN}']
     """
     _check_3d(result, "slices")
-    values = np.atleast_1d(np.asarray(DEFAULT_PHIS if phis is None else phis, dtype=np.float64))
+    values = np.atleast_1d(
+        np.asarray(_default_cuts(result) if phis is None else phis, dtype=np.float64)
+    )
     if values.ndim != 1 or values.size == 0 or not np.isfinite(values).all():
-        raise InvalidParameterError("phis", "one or more finite angles (radians)", phis)
+        what = "angles (radians)" if 2 in result.mechanism.periodic_axes else "values"
+        raise InvalidParameterError("phis", f"one or more finite {what}", phis)
     if axes is None:
         axes = panels(values.size, 2, 6.0)
     if len(axes) < values.size:
