@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from ..hypertree._kernels import _edge_labels, _relabel, _union
+from ..hypertree._kernels import edge_labels, relabel_roots, union_sets
 from ..hypertree.status import IN
 from ..limits import JointLimit
 from .sheets import SheetTable
@@ -188,7 +188,9 @@ def _possible_labels(
                     continue
                 for cj in range(slots):
                     if has[p, cj, j] and _pieces_meet(lo, hi, combo, i, p, ci, j, p, cj, tol):
-                        _union(parent, (i * n_post + p) * slots + ci, (j * n_post + p) * slots + cj)
+                        union_sets(
+                            parent, (i * n_post + p) * slots + ci, (j * n_post + p) * slots + cj
+                        )
     for k in range(pq.shape[0]):
         p, q = pq[k, 0], pq[k, 1]
         for i in range(n):
@@ -199,8 +201,10 @@ def _possible_labels(
                     continue
                 for cq in range(slots):
                     if has[q, cq, i] and _pieces_meet(lo, hi, combo, i, p, cp, i, q, cq, tol):
-                        _union(parent, (i * n_post + p) * slots + cp, (i * n_post + q) * slots + cq)
-    return _relabel(parent, taken)
+                        union_sets(
+                            parent, (i * n_post + p) * slots + cp, (i * n_post + q) * slots + cq
+                        )
+    return relabel_roots(parent, taken)
 
 
 def _posture_pairs(postures: NDArray[np.int64]) -> list[tuple[int, int, NDArray[np.bool_]]]:
@@ -306,7 +310,7 @@ def region_graph(
     n_edges = _certain_edges(*args, np.zeros((0, 2), dtype=np.int64), False)
     certain_edges = np.empty((n_edges, 2), dtype=np.int64)
     _certain_edges(*args, certain_edges, True)
-    certain, n_certain = _edge_labels(
+    certain, n_certain = edge_labels(
         n * n_post, certain_edges[:, 0], certain_edges[:, 1], certified.ravel()
     )
     certain_sign = np.zeros(n_certain, dtype=np.int8)

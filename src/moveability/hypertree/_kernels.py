@@ -27,7 +27,7 @@ def _find(parent: NDArray[np.int64], i: int) -> int:  # pragma: no cover - compi
 
 
 @njit(cache=True, nogil=True)
-def _union(parent: NDArray[np.int64], i: int, j: int) -> None:  # pragma: no cover - compiled
+def union_sets(parent: NDArray[np.int64], i: int, j: int) -> None:  # pragma: no cover - compiled
     """Join the sets of ``i`` and ``j``; the smaller root stays the root."""
     a = _find(parent, i)
     b = _find(parent, j)
@@ -39,7 +39,7 @@ def _union(parent: NDArray[np.int64], i: int, j: int) -> None:  # pragma: no cov
 
 
 @njit(cache=True, nogil=True)
-def _relabel(
+def relabel_roots(
     parent: NDArray[np.int64], taken: NDArray[np.bool_]
 ) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
     """Labels of the taken elements' sets, numbered by first element (-1 elsewhere)."""
@@ -162,8 +162,8 @@ def _label(
             j = _gallop(keys, key, last[d])
             last[d] = j
             if chosen[j]:
-                _union(parent, i, j)
-    return _relabel(parent, chosen)
+                union_sets(parent, i, j)
+    return relabel_roots(parent, chosen)
 
 
 @njit(cache=True, nogil=True)
@@ -350,13 +350,13 @@ def label_leaves(
 
 
 @njit(cache=True, nogil=True)
-def _edge_labels(
+def edge_labels(
     n: int, a: NDArray[np.int64], b: NDArray[np.int64], taken: NDArray[np.bool_]
 ) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
     parent = np.arange(n)
     for t in range(a.size):
-        _union(parent, a[t], b[t])
-    return _relabel(parent, taken)
+        union_sets(parent, a[t], b[t])
+    return relabel_roots(parent, taken)
 
 
 def edge_components(
@@ -366,7 +366,7 @@ def edge_components(
     node), labelled on the taken nodes in the order of their first node, -1 elsewhere;
     and their count."""
     e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
-    labels, count = _edge_labels(
+    labels, count = edge_labels(
         int(n),
         np.ascontiguousarray(e[:, 0]),
         np.ascontiguousarray(e[:, 1]),
