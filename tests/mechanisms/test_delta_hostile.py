@@ -21,7 +21,8 @@ stable under small moves), feasible (True: one reference region holds both
 poses, witnesses valid; False: none does), count (at_least at most the
 reference's number, at_most at least its large regions), volume bounds against
 Monte Carlo, planned motions followed between their configurations by the
-reference (valid, one sign of det A, joints within the limits), the pose box.
+reference (valid, one sign of det A, joints within the limits), the pose box,
+box enclosures, and generalized aspects on one design.
 """
 
 from __future__ import annotations
@@ -545,3 +546,86 @@ def test_box_enclosures_hold_sampled_configurations(design):
         assert ((d >= det.lo[ok] - slack) & (d <= det.hi[ok] + slack)).all()
         checked += int(ok.sum())
     assert checked > 5000
+
+
+def _serial_terms(ref, pose, q):
+    """Half dF_i/dtheta_i of each leg: (P + r u_i - E_i) . (-dE_i/dtheta_i)."""
+    out = []
+    for i in range(3):
+        c, s = np.cos(q[..., i]), np.sin(q[..., i])
+        zero = 0 * c
+        elbow = (ref.R + ref.la * c)[..., None] * U[i] + np.stack([zero, zero, -ref.la * s], -1)
+        d_elbow = (-ref.la * s)[..., None] * U[i] + np.stack([zero, zero, -ref.la * c], -1)
+        out.append(-((pose + ref.r * U[i] - elbow) * d_elbow).sum(-1))
+    return np.stack(out, -1)
+
+
+def test_generalized_aspects_of_an_arm_as_long_as_the_rod():
+    """Generalized aspects (det A and det B of one sign each): the reference labels
+    {q: rho < lb} per side of the centres' plane and sign pattern of the legs'
+    serial terms; the count and the region answers agree with it."""
+    design, limits = (10.0, 4.0, 8.0, 8.0), [(-PI / 2, PI / 2)] * 3
+    ref = Ref(design, limits, n=3)
+    n = 41
+    axes = [np.linspace(lo, hi, n) for lo, hi in ref.limits]
+    q = np.stack(np.meshgrid(*axes, indexing="ij"), -1)
+    closed = ref.circumradius(q) < ref.lb
+    labels, total = {}, 0
+    for side in (1, -1):
+        with np.errstate(all="ignore"):
+            signs = np.sign(_serial_terms(ref, ref.forward(q, side), q))
+        for pattern in itertools.product((1, -1), repeat=3):
+            mask = closed & (signs == np.array(pattern)).all(-1)
+            labels[side, pattern], k = ndimage.label(mask, structure=np.ones((3, 3, 3)))
+            total += k
+
+    def aspects_of(pose):
+        out = set()
+        for qq in ref.inverse(pose):
+            d = ref.det_a(pose, qq)
+            terms = _serial_terms(ref, pose, qq)
+            scale = np.linalg.norm(pose - ref.centres(qq), axis=-1).prod()
+            if abs(d) < 1e-3 * scale or (np.abs(terms) < 1e-3 * ref.la * ref.lb).any():
+                return None
+            lo, hi = ref.limits[:, 0], ref.limits[:, 1]
+            k = np.clip(np.round((qq - lo) / (hi - lo) * (n - 1)).astype(int), 0, n - 1)
+            key = (int(np.sign(d)), tuple(int(v) for v in np.sign(terms)))
+            lab = int(labels[key][tuple(k)])
+            if lab == 0:
+                return None
+            out.add((*key, lab))
+        return out
+
+    m = from_spec(_spec(design, limits))
+    result = analyze(m, precision=1.0, generalized_aspects=True, resolve=False)
+    assert total == 4 and 1 <= result.count[0] <= total
+    rng = np.random.default_rng(18)
+    lo, hi = m.pose_box()
+    poses = lo + (hi - lo) * rng.random((800, 3))
+    step = 0.005 * (hi - lo)
+    found = []
+    for p in poses:
+        here = aspects_of(p)
+        moves = [p + s * step * e for e in np.eye(3) for s in (1, -1)]
+        found.append(
+            here if here is not None and all(aspects_of(x) == here for x in moves) else None
+        )
+    located = result.locate(poses)["points"]
+    yes = {r.id: [] for r in result.regions}
+    no = {r.id: [] for r in result.regions}
+    for here, point in zip(found, located, strict=True):
+        if here is None:
+            continue
+        for rid, answer in point["regions"].items():
+            if answer is True:
+                assert here
+                yes[int(rid)].append(here)
+            elif answer is False:
+                no[int(rid)].append(here)
+    checked = 0
+    for region in result.regions:
+        if yes[region.id]:
+            common = set.intersection(*yes[region.id]) - set().union(*no[region.id])
+            assert {c for c in common if c[0] == region.sign}, region.id
+            checked += 1
+    assert checked >= 2
