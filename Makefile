@@ -32,6 +32,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_counts.py
 	$(PY) benchmarks/bench_speed.py
 	$(PY) benchmarks/bench_constraints.py
+	$(PY) benchmarks/bench_delta.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache .hypothesis
