@@ -507,7 +507,10 @@ def _adapted_flows(
             det_at.append(rate.mid)
         det_normal = np.stack(det_at, axis=1)
         joint_normal = [np.stack([g.mid for g in joint_at[i]], axis=1) for i in range(n_legs)]
-        beyond = _constraint_normals(mechanism, margins, lo, hi, angles, gradients)
+        beyond = {
+            s: _constraint_normals(mechanism, margins, lo, hi, angles, gradients, s)
+            for s in (1, -1)
+        }
 
     def unit(v: Array) -> Array:
         norm = np.linalg.norm(v, axis=1, keepdims=True)
@@ -525,7 +528,7 @@ def _adapted_flows(
                     np.where(lower[j][:, None], unit(joint_normal[i]), 0.0)
                     - np.where(upper[j][:, None], unit(joint_normal[i]), 0.0)
                 )
-            for rise, fall, normal in beyond:
+            for rise, fall, normal in beyond[s]:
                 normals.append(
                     np.where(rise[:, None], unit(normal), 0.0)
                     - np.where(fall[:, None], unit(normal), 0.0)
@@ -562,8 +565,10 @@ def _constraint_normals(
     hi: Array,
     angles: list[Interval],
     gradients: list[list[Interval]],
+    det_sign: int,
 ) -> list[tuple[NDArray[np.bool_], NDArray[np.bool_], Array]]:
-    """For each constraint beyond the paper that may be active in some leaf (see
+    """For each constraint beyond the paper that may be active in some leaf at
+    the configurations with det A of sign ``det_sign`` (see
     :meth:`~moveability.mechanisms.constraints.ConstraintMargins.rates`): where it
     may be active at a lower bound, at an upper bound, and (n, k) the midpoints
     of the enclosures of its gradient over the leaves (a direction only)."""
@@ -576,7 +581,7 @@ def _constraint_normals(
             along = [Interval(np.full(n, float(axis == j))) for j in range(k)]
             rates = [g[axis] for g in gradients]
             moving = mechanism.linkage_velocities(lo, hi, angles, along, rates)
-            per_axis.append(margins.rates(moving))
+            per_axis.append(margins.rates(moving, det_sign=det_sign))
     out = []
     for j, (rise, fall, _) in enumerate(per_axis[0]):
         normal = np.stack([per_axis[axis][j][2].mid for axis in range(k)], axis=1)

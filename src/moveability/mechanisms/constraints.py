@@ -308,6 +308,55 @@ def constraint_codes(
 _Option = tuple[list[tuple[str, tuple[str, str], Any]], Any]
 
 
+#: sides that every configuration keeping all links apart has: (point, line
+#: with its names in order) -> (boxes where the side is > 0, where it is < 0)
+_Facts = dict[tuple[str, tuple[str, str]], tuple[Any, Any]]
+
+
+def _oriented(point: str, line: tuple[str, str]) -> tuple[tuple[str, tuple[str, str]], int]:
+    """The key of a side in :data:`_Facts`, and +-1: the side's sign relative to
+    the key's."""
+    if line[0] <= line[1]:
+        return (point, line), 1
+    return (point, (line[1], line[0])), -1
+
+
+def _readings(x: str, y: str, z: str) -> list[tuple[tuple[str, str, str], int]]:
+    """The six orders of a turn's three points, each with its sign relative to
+    ``(x, y, z)``: cyclic orders agree, the others flip."""
+    return [
+        ((x, y, z), 1),
+        ((y, z, x), 1),
+        ((z, x, y), 1),
+        ((y, x, z), -1),
+        ((x, z, y), -1),
+        ((z, y, x), -1),
+    ]
+
+
+def _learn(facts: _Facts, point: str, line: tuple[str, str], sign: Any, mask: Any) -> None:
+    """Add to ``facts`` that the side has ``sign`` (+-1 per box) in boxes ``mask``."""
+    key, flip = _oriented(point, line)
+    up, down = facts.get(key, (False, False))
+    facts[key] = (up | (mask & (flip * sign > 0)), down | (mask & (flip * sign < 0)))
+
+
+def _against(facts: _Facts, point: str, line: tuple[str, str], sign: Any) -> Any:
+    """Where ``facts`` give the side the sign opposite to ``sign`` (+-1 per box)."""
+    key, flip = _oriented(point, line)
+    if key not in facts:
+        return False
+    up, down = facts[key]
+    return np.where(flip * sign > 0, down, up)
+
+
+def _same_facts(one: _Facts, other: _Facts) -> bool:
+    return one.keys() == other.keys() and all(
+        np.array_equal(one[key][0], other[key][0]) and np.array_equal(one[key][1], other[key][1])
+        for key in one
+    )
+
+
 @dataclass(frozen=True)
 class _Overlap:
     """What :meth:`ConstraintMargins._overlap` finds for a pair of links: the codes
@@ -381,7 +430,10 @@ class ConstraintMargins:
                 self._known[point, link] = (2 * int(branches[leg]) - 1, ~regular[:, leg])
         self._det_known = {(point, link): factor for point, link, factor in linkage.det_sides}
         self._cache: dict[int, tuple[NDArray[np.bool_], Interval, Point]] = {}
-        self._signed: dict[tuple[int, int], tuple[NDArray[np.bool_], list[_Option]]] = {}
+        self._signed_list: dict[int, list[tuple[NDArray[np.bool_], list[_Option]]]] = {}
+        #: per sign of det A: boxes where no configuration off the folds keeps
+        #: every pair apart (see :meth:`_signed_pairs`)
+        self._void: dict[int, NDArray[np.bool_]] = {}
         n = self._shape = next(iter(points.values()))[0].lo.shape
         holds = np.ones(n, dtype=bool)
         fails = np.zeros(n, dtype=bool)
@@ -437,14 +489,16 @@ class ConstraintMargins:
         self.codes = np.where(fails, OUTSIDE, np.where(holds, INSIDE, STRADDLES)).astype(np.uint8)
 
     def rates(
-        self, velocities: Mapping[str, Point], pairs: bool = True
+        self, velocities: Mapping[str, Point], pairs: bool = True, det_sign: int = 0
     ) -> list[tuple[NDArray[np.bool_], NDArray[np.bool_], Interval]]:
         """For each constraint that may be active in some box: where it may be
         active at a lower bound (it is kept when its rate is at least 0), at an
         upper bound (kept when at most 0), and an enclosure of its rate when the
         named points move at ``velocities`` (enclosures, per point). With
         ``pairs``, also the sides that keep overlapping links apart where they
-        may touch (:meth:`_overlap`): one way among others to keep them apart."""
+        may touch (:meth:`_overlap`): one way among others to keep them apart;
+        with ``det_sign`` (+-1), those of the configurations with det A of that
+        sign (:meth:`_signed_pairs`)."""
         out = []
         pts = self._points
         for (a, b), (c, d), rise, fall in self._angles:
@@ -466,7 +520,13 @@ class ConstraintMargins:
             )
             rate = (q[0] * move[0] + q[1] * move[1]) * 2.0
             out.append((near, np.zeros(near.shape[0], dtype=bool), rate))
-        for options in self._overlaps if pairs else ():
+        if not pairs:
+            overlaps: list[list[_Option]] = []
+        elif det_sign and self._det_known:
+            overlaps = [options for _, options in self._signed_pairs(det_sign)]
+        else:
+            overlaps = self._overlaps
+        for options in overlaps:
             for terms, mask in options:
                 if not mask.any():
                     continue
@@ -525,7 +585,7 @@ class ConstraintMargins:
                 if not active.any():
                     continue
                 if det_sign and self._det_known:
-                    active, options = self._signed_pair(index, det_sign)
+                    active, options = self._signed_pairs(det_sign)[index]
                 # any one of these keeps the pair apart
                 apart = fold_apart | self._apart_kept(first, second, velocities)
                 for terms, mask in options:
@@ -537,22 +597,154 @@ class ConstraintMargins:
                         holds &= np.where(sign > 0, rate.lo >= 0, rate.hi <= 0)
                     apart |= holds
                 ok &= ~active | apart
+            if det_sign in self._void:
+                # no configuration to keep
+                ok |= self._void[det_sign]
         return ok
 
-    def _signed_pair(self, index: int, det_sign: int) -> tuple[NDArray[np.bool_], list[_Option]]:
-        """Pair ``index`` for the configurations with det A of sign ``det_sign``
-        alone, off the folds: where it may still touch, and the ways to keep it
-        apart (:meth:`_overlap`); computed once per sign."""
-        key = (index, det_sign)
-        if key not in self._signed:
-            first, second, active, _ = self._pairs[index]
+    def _signed_pairs(self, det_sign: int) -> list[tuple[NDArray[np.bool_], list[_Option]]]:
+        """Every pair for the configurations with det A of sign ``det_sign`` alone,
+        off the folds: where it may still touch, and the ways to keep it apart
+        (:meth:`_overlap`); computed once per sign, with :attr:`_void`, the boxes
+        where no such configuration keeps all links apart.
+
+        Let S be the configurations of a box that keep all links apart. A pair
+        kept apart by one side alone (a one-term option) is apart exactly where
+        that side has its sign, so every configuration of S has it: a *fact*. A
+        two-term option holds one of two cases (the first term's side has its
+        sign, or the second's); a case whose side a fact gives the other sign
+        holds nowhere in S, so the other term alone keeps the pair apart there
+        (one more fact). Along a motion that checks every term kept, a
+        configuration of S has all facts until it first leaves S, and each term
+        it checks keeps its strict sign up to that moment: the pair stays apart.
+        Nothing here drops a check, so facts may come from any pair.
+
+        The box is void (S empty) where two facts require one side with both
+        signs, where neither case of a two-term option can hold, or where, with
+        the facts as known sides (:meth:`_side`), some pair certainly crosses.
+        """
+        if det_sign in self._signed_list:
+            return self._signed_list[det_sign]
+        pairs = []
+        for first, second, active, _ in self._pairs:
             decided = self._pair_code(first, second, det_sign) != STRADDLES
             overlap = self._overlap(first, second, active & ~decided, det_sign, off_fold=True)
             decided |= overlap.codes != STRADDLES
             active = active & ~decided
-            options = [(terms, m & active) for terms, m in overlap.sides]
-            self._signed[key] = (active, options)
-        return self._signed[key]
+            pairs.append((active, [(terms, m & active) for terms, m in overlap.sides]))
+        void = np.zeros(self._shape, dtype=bool)
+        facts: _Facts = {}
+        for options in (options for _, options in pairs):
+            for terms, mask in options:
+                if len(terms) == 1:
+                    _learn(facts, *terms[0], mask)
+        for _ in range(len(pairs) + 1):
+            grown = dict(facts)
+            narrowed = []
+            for active, options in pairs:
+                new: list[_Option] = []
+                for terms, mask in options:
+                    if len(terms) != 2:
+                        new.append((terms, mask))
+                        continue
+                    first_off = mask & _against(facts, *terms[0])
+                    second_off = mask & _against(facts, *terms[1])
+                    void |= first_off & second_off
+                    new.append((terms, mask & ~first_off & ~second_off))
+                    for term, only in (
+                        (terms[1], first_off & ~second_off),
+                        (terms[0], second_off & ~first_off),
+                    ):
+                        if only.any():
+                            _learn(grown, *term, only)
+                            new.append(([term], only))
+                narrowed.append((active, new))
+            pairs = narrowed
+            if _same_facts(grown, facts):
+                break
+            facts = grown
+        for up, down in facts.values():
+            void |= np.asarray(up & down)
+        if any(active.any() for active, _ in pairs):
+            void |= self._three_turns(det_sign, facts)
+        if facts:
+            for (first, second, _, _), (active, _) in zip(self._pairs, pairs, strict=True):
+                open_ = active & ~void
+                if not open_.any():
+                    continue
+                void |= open_ & (self._pair_code(first, second, det_sign, facts) == OUTSIDE)
+                overlap = self._overlap(first, second, open_, det_sign, True, facts)
+                void |= open_ & (overlap.codes == OUTSIDE)
+        self._signed_list[det_sign] = pairs
+        self._void[det_sign] = void
+        return pairs
+
+    def _three_turns(self, det_sign: int, facts: _Facts) -> NDArray[np.bool_]:
+        """Boxes where the known turns of the named points contradict each other.
+
+        For points X, Y, Z, W with ``u = Y - X``, ``d = Z - X``, ``e = W - X``:
+        ``(d x e) |u|^2 = (d . u)(u x e) - (u x d)(e . u)``. Where the turns
+        ``u x e`` and ``u x d`` have known signs (:meth:`_side`: from the branches
+        off the folds, the sign of det A, the ``facts``, or the enclosures) and
+        the dot products certain signs, the right side may have a certain sign;
+        a known sign of ``d x e`` opposite to it leaves no configuration.
+        Only with at most six named points (the triples grow as their cube)."""
+        names = sorted(self._points)
+        out = np.zeros(self._shape, dtype=bool)
+        if len(names) > 6:
+            return out
+        # the sign classes of every turn (x, y, z) -> (> 0, < 0) per box
+        turn: dict[tuple[str, str, str], tuple[NDArray[np.bool_], NDArray[np.bool_]]] = {}
+        for x, y, z in itertools.combinations(names, 3):
+            up = np.zeros(self._shape, dtype=bool)
+            down = np.zeros(self._shape, dtype=bool)
+            for (a, b, c), flip in _readings(x, y, z):
+                side = self._side(c, (a, b), det_sign, True, facts)
+                positive, negative = side.lo > 0, side.hi < 0
+                up |= positive if flip > 0 else negative
+                down |= negative if flip > 0 else positive
+            for (a, b, c), flip in _readings(x, y, z):
+                turn[a, b, c] = (up, down) if flip > 0 else (down, up)
+        pts = self._points
+
+        def dot(p: str, q: str, o: str) -> tuple[NDArray[np.bool_], ...]:
+            u, v = _minus(pts[p], pts[o]), _minus(pts[q], pts[o])
+            value = u[0] * v[0] + u[1] * v[1]
+            return value.lo > 0, value.hi < 0, value.lo >= 0, value.hi <= 0
+
+        with np.errstate(invalid="ignore", over="ignore"):
+            for x in names:
+                others = [n for n in names if n != x]
+                for y in others:
+                    rest = [n for n in others if n != y]
+                    for z, w in itertools.combinations(rest, 2):
+                        du_pos, du_neg, du_nn, du_np = dot(z, y, x)
+                        eu_pos, eu_neg, eu_nn, eu_np = dot(w, y, x)
+                        ue_pos, ue_neg = turn[x, y, w]
+                        ud_pos, ud_neg = turn[x, y, z]
+                        # first term (d . u)(u x e), second -(u x d)(e . u)
+                        one_pos = (du_pos & ue_pos) | (du_neg & ue_neg)
+                        one_neg = (du_pos & ue_neg) | (du_neg & ue_pos)
+                        one_nn = one_pos | (du_nn & ue_pos) | (du_np & ue_neg)
+                        one_np = one_neg | (du_nn & ue_neg) | (du_np & ue_pos)
+                        two_pos = (ud_pos & eu_neg) | (ud_neg & eu_pos)
+                        two_neg = (ud_pos & eu_pos) | (ud_neg & eu_neg)
+                        two_nn = two_pos | (ud_pos & eu_np) | (ud_neg & eu_nn)
+                        two_np = two_neg | (ud_pos & eu_nn) | (ud_neg & eu_np)
+                        de_pos, de_neg = turn[x, z, w]
+                        forced_pos = (one_pos & two_nn) | (one_nn & two_pos)
+                        forced_neg = (one_neg & two_np) | (one_np & two_neg)
+                        out |= (forced_pos & de_neg) | (forced_neg & de_pos)
+        return out
+
+    def void(self, det_sign: int) -> NDArray[np.bool_]:
+        """Boxes where no configuration off the folds with det A of sign
+        ``det_sign`` (+-1) keeps every pair of links apart: the sides that the
+        pairs require contradict each other (see :meth:`_signed_pairs`)."""
+        if not self._det_known:
+            return np.zeros(self._shape, dtype=bool)
+        self._signed_pairs(det_sign)
+        return self._void[det_sign]
 
     def excluded(self, det_sign: int) -> NDArray[np.bool_]:
         """Boxes where no configuration with det A of sign ``det_sign`` (+-1)
@@ -574,24 +766,34 @@ class ConstraintMargins:
         return out
 
     def _pair_code(
-        self, first: tuple[str, str], second: tuple[str, str], det_sign: int = 0
+        self,
+        first: tuple[str, str],
+        second: tuple[str, str],
+        det_sign: int = 0,
+        facts: _Facts | None = None,
     ) -> NDArray[np.uint8]:
         """:func:`segment_codes` of two links, with the sides known (see :meth:`_side`)."""
         return _crossing_codes(
-            self._side(second[0], first, det_sign),
-            self._side(second[1], first, det_sign),
-            self._side(first[0], second, det_sign),
-            self._side(first[1], second, det_sign),
+            self._side(second[0], first, det_sign, facts=facts),
+            self._side(second[1], first, det_sign, facts=facts),
+            self._side(first[0], second, det_sign, facts=facts),
+            self._side(first[1], second, det_sign, facts=facts),
         )
 
     def _side(
-        self, point: str, link: tuple[str, str], det_sign: int = 0, off_fold: bool = False
+        self,
+        point: str,
+        link: tuple[str, str],
+        det_sign: int = 0,
+        off_fold: bool = False,
+        facts: _Facts | None = None,
     ) -> Interval:
         """``(l1 - l0) x (point - l0)`` over the boxes; a side known from the
         posture (:attr:`Linkage.ends`) replaces it by +-1 where the leg does not
         fold (everywhere with ``off_fold``: for the configurations off the fold
         alone), and one known from the sign of det A (:attr:`Linkage.det_sides`)
-        everywhere, when ``det_sign`` (+-1) is given."""
+        everywhere, when ``det_sign`` (+-1) is given; ``facts`` give more signs
+        (see :meth:`_signed_pairs`)."""
         pts = self._points
         out = _cross(_minus(pts[link[1]], pts[link[0]]), _minus(pts[point], pts[link[0]]))
         for key, flip in (((point, link), 1), ((point, link[::-1]), -1)):
@@ -605,6 +807,13 @@ class ConstraintMargins:
             if det_sign and key in self._det_known:
                 fixed = float(flip * self._det_known[key] * det_sign)
                 out = Interval(np.full(self._shape, fixed))
+        if facts:
+            key, flip = _oriented(point, link)
+            if key in facts:
+                up, down = facts[key]
+                value = np.where(up, flip, np.where(down, -flip, np.nan))
+                known = ~np.isnan(value)
+                out = Interval(np.where(known, value, out.lo), np.where(known, value, out.hi))
         return out
 
     def _overlap(
@@ -614,6 +823,7 @@ class ConstraintMargins:
         where: NDArray[np.bool_],
         det_sign: int = 0,
         off_fold: bool = False,
+        facts: _Facts | None = None,
     ) -> _Overlap:
         """Two links nearly along one line, overlapping: whether they are apart
         comes down to the sides of their end points.
@@ -676,10 +886,10 @@ class ConstraintMargins:
                     ordered &= along(v).lo > 0
                 if not ordered.any():
                     continue
-                at_e1 = self._side(e1, (f2, e2), det_sign, off_fold)
-                at_e2 = -self._side(e2, (e1, f1), det_sign, off_fold)
-                at_f1 = self._side(f1, (f2, e2), det_sign, off_fold)
-                at_f2 = -self._side(f2, (e1, f1), det_sign, off_fold)
+                at_e1 = self._side(e1, (f2, e2), det_sign, off_fold, facts)
+                at_e2 = -self._side(e2, (e1, f1), det_sign, off_fold, facts)
+                at_f1 = self._side(f1, (f2, e2), det_sign, off_fold, facts)
+                at_f2 = -self._side(f2, (e1, f1), det_sign, off_fold, facts)
                 apart = (
                     (positive(at_e1) & positive(at_e2))
                     | (negative(at_e1) & negative(at_e2))

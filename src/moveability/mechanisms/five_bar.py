@@ -120,6 +120,31 @@ class FiveBar(Mechanism):
         det_sides=(("C", ("D", "P"), 1), ("D", ("C", "P"), -1)),
     )
 
+    def det_a_boxes(
+        self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
+    ) -> Interval:
+        """Enclosure of det A over boxes: the rows stacked and, for a known
+        posture, intersected with one form per leg in which its branch appears
+        as a sign (:func:`branch_det`): sharp where a leg folds, where the
+        elbow's angle enclosure is wide but its side is not."""
+        natural = super().det_a_boxes(lo, hi, angles)
+        if posture is None:
+            return natural
+        branches = self.postures[posture]
+        points = [leg.knee_boxes(angles[i])[0] for i, leg in enumerate(self.rr_legs)]
+        out = natural
+        for i, (leg, other) in enumerate(((0, 1), (1, 0))):
+            form = branch_det(self.rr_legs[leg], int(branches[leg]), lo, hi, points[other])
+            if i == 1:
+                form = -form  # det A = -(P - D) x (P - C)
+            with np.errstate(invalid="ignore"):
+                lo_, hi_ = np.maximum(out.lo, form.lo), np.minimum(out.hi, form.hi)
+                # NaN bounds leave the other enclosure; an empty meet (no
+                # configuration) keeps it as well
+                keep = np.isnan(lo_) | np.isnan(hi_) | (lo_ > hi_)
+            out = Interval(np.where(keep, out.lo, lo_), np.where(keep, out.hi, hi_))
+        return out
+
     def linkage_points(
         self, lo: Array, hi: Array, angles: list[Interval]
     ) -> dict[str, tuple[Interval, Interval]]:
@@ -193,3 +218,55 @@ class FiveBar(Mechanism):
             # the box must hold the whole enclosure of the crossing, strictly
             out |= ((lo < crossing.lo) & (crossing.hi < hi)).all(axis=1)
         return out
+
+
+def branch_det(leg: RRLeg, branch: int, lo: Array, hi: Array, other: list[Interval]) -> Interval:
+    """Enclosure of ``(P - C) x (P - Q)`` over boxes of P, for the elbow C of
+    ``leg`` on ``branch`` and a point Q in ``other`` (the other leg's elbow).
+
+    With O the leg's base, ``rho = |P - O|^2``, a and b its proximal and distal
+    lengths, the elbow is ``C - O = c (P - O) + s k perp(P - O)`` with
+    ``c = (rho + a^2 - b^2) / (2 rho)``, ``k = sqrt(4 a^2 rho - (rho + a^2 - b^2)^2)
+    / (2 rho) >= 0`` and ``s = +1`` on branch 0 (the elbow turned
+    counterclockwise from P - O), ``-1`` on branch 1. Then
+    ``(P - C) x w = (1 - c) (P - O) x w + s k (P - O) . w`` for ``w = P - Q``,
+    and ``(P - O) x (P - Q) = (Q - O) x (P - O)``: each coefficient depends on
+    rho alone, and the fold (k = 0) splits no enclosure.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> leg = RRLeg((0.0, 0.0), 8.0, 5.0, "theta1")
+    >>> p = np.array([[10.0, 3.0]])
+    >>> t = leg.angles(p)[0, 0]
+    >>> (u, v), (w, z) = p[0] - leg.elbow(t), p[0] - np.array([4.0, 6.0])
+    >>> exact = u * z - v * w
+    >>> box = branch_det(leg, 0, p, p, [iv.as_interval(np.array([4.0])),
+    ...                                 iv.as_interval(np.array([6.0]))])
+    >>> bool(box.lo[0] <= exact <= box.hi[0]) and float(box.hi[0] - box.lo[0]) < 1e-9
+    True
+    """
+    a2, b2 = leg.proximal**2, leg.distal**2
+    x = Interval(lo[:, 0], hi[:, 0]) - leg.base[0]
+    y = Interval(lo[:, 1], hi[:, 1]) - leg.base[1]
+    rho = iv.square(x) + iv.square(y)
+    shift = iv.as_interval(a2) - b2
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        one_minus_c = iv.as_interval(0.5) - shift / (rho * 2.0)
+
+        # 4 a^2 rho - (rho + a^2 - b^2)^2 is concave in rho, largest at a^2 + b^2
+        def g(r: Interval) -> Interval:
+            return r * (4.0 * a2) - iv.square(r + shift)
+
+        ends = iv.hull(g(Interval(rho.lo)), g(Interval(rho.hi)))
+        top = g(iv.as_interval(np.full(rho.lo.shape, a2 + b2)))
+        inside = (rho.lo <= a2 + b2) & (rho.hi >= a2 + b2)
+        g_range = Interval(ends.lo, np.where(inside, np.maximum(ends.hi, top.hi), ends.hi))
+        k = iv.sqrt(g_range) / (rho * 2.0)
+        qx, qy = other[0] - leg.base[0], other[1] - leg.base[1]
+        cross = qx * y - qy * x
+        wx = Interval(lo[:, 0], hi[:, 0]) - other[0]
+        wy = Interval(lo[:, 1], hi[:, 1]) - other[1]
+        dot = x * wx + y * wy
+        side = 1.0 if branch == 0 else -1.0
+        return one_minus_c * cross + k * dot * side
