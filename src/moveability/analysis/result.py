@@ -37,7 +37,7 @@ from .flows import (
     slot_spans,
     supports_flows,
 )
-from .joint_space import JointSpaceCount, count_in_joint_space, has_dyads
+from .joint_space import JointSpaceCount, count_in_joint_space, joint_condition
 from .regions import RegionGraph, region_graph
 from .sheets import SheetTable, classify_sheets, stack_tables
 
@@ -190,7 +190,7 @@ def analyze(
         After the pass at the precision, refine below it, one level a round,
         only the leaves that keep the count of regions or N-connectivity open
         (see :func:`resolve_analysis`); the default. For the five-bar and the
-        biglide the count of regions is also proved in the joint space (see
+        biglide (and the Delta) the count of regions is also proved in the joint space (see
         :mod:`moveability.analysis.joint_space`), which often ends the refinement
         early. False keeps the plain pass. Mechanisms whose legs give no
         rates (see :func:`moveability.analysis.flows.supports_flows`) keep the plain
@@ -273,11 +273,11 @@ def analyze(
             f"a precision whose tree holds at most max_leaves={max_leaves} leaves",
             precision,
         ) from None
-    # two dyads: the count is also proved in the joint space (see moveability.analysis.joint_space)
+    # two dyads, the Delta: the count is also proved in the joint space (see joint_space)
     joint = None
     # the joint-space count knows the paper's hypotheses only
     paper = mechanism.restrictions.empty
-    if resolve and not generalized_aspects and has_dyads(mechanism) and paper:
+    if resolve and not generalized_aspects and joint_condition(mechanism) is not None and paper:
         phase(progress, "counting the regions in the joint space")
         joint = count_in_joint_space(mechanism)
     phase(progress, "joining the regions")
