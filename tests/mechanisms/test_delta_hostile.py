@@ -443,6 +443,42 @@ def test_proved_designs_locate_and_bracket_volumes(proved):
     _check_answers(*proved)
 
 
+@pytest.mark.parametrize("name", ["arm-equals-rod", "unlimited", "across-pi", "example-per-axis"])
+def test_the_joint_condition_and_its_enclosures(name):
+    """``F = 4 lb^2 |a x b|^2 - |a|^2 |b|^2 |a - b|^2`` of the reference's centres:
+    positive exactly where the circumradius is below lb; the package's boxes hold
+    F and its finite-difference gradient at sampled joints."""
+    design, limits, _, _ = CASES[name]
+    ref = Ref(design, limits, n=3)
+    condition = from_spec(_spec(design, limits)).joint_condition()
+    rng = np.random.default_rng(14)
+    lo, hi = ref.limits.T
+
+    def f_ref(q):
+        c = ref.centres(q)
+        a, b = c[..., 0, :] - c[..., 2, :], c[..., 1, :] - c[..., 2, :]
+        sq = lambda v: (v * v).sum(-1)  # noqa: E731
+        return 4 * ref.lb**2 * sq(np.cross(a, b)) - sq(a) * sq(b) * sq(a - b)
+
+    centre = lo + (hi - lo) * rng.random((400, 3))
+    half = 0.05 * rng.random((400, 1)) * (hi - lo)
+    value, grad, _ = condition.terms(centre - half, centre + half)
+    scale = ref.lb**6
+    for _ in range(10):
+        q = centre - half + 2 * half * rng.random(centre.shape)
+        f = f_ref(q)
+        rho = ref.circumradius(q)
+        clear = np.abs(f) > 1e-9 * scale
+        assert ((f > 0) == (rho < ref.lb))[clear].all()
+        slack = 1e-9 * scale
+        assert ((f >= value.lo - slack) & (f <= value.hi + slack)).all()
+        for i in range(3):
+            step = np.zeros(3)
+            step[i] = 1e-6
+            d = (f_ref(q + step) - f_ref(q - step)) / 2e-6
+            assert ((d >= grad[i].lo - 1e-4 * scale) & (d <= grad[i].hi + 1e-4 * scale)).all()
+
+
 @pytest.mark.parametrize("name", list(CASES))
 def test_joint_space_counts_bracket_the_reference(name):
     """The count in the joint space on the hostile designs: equal to the

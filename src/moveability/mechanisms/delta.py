@@ -546,6 +546,12 @@ def _minus(a: list[Interval], b: list[Interval]) -> list[Interval]:
     return [x - y for x, y in zip(a, b, strict=True)]
 
 
+def _no_nan(x: Interval) -> Interval:
+    """``x`` with NaN bounds made infinite (none is expected: every term is
+    bounded; a NaN bound would say nothing, and compare false)."""
+    return Interval(np.where(np.isnan(x.lo), -_INF, x.lo), np.where(np.isnan(x.hi), _INF, x.hi))
+
+
 class Circumradius:
     """The Delta's condition in the joint space: ``F(q) > 0`` where
 
@@ -639,7 +645,7 @@ class Circumradius:
             np.where(good, np.maximum(natural.lo, mean.lo), natural.lo),
             np.where(good, np.minimum(natural.hi, mean.hi), natural.hi),
         )
-        return value, grad, []
+        return _no_nan(value), [_no_nan(g) for g in grad], []
 
     def classify(self, lo: Array, hi: Array) -> NDArray[np.uint8]:
         """IN where ``F > 0`` over the whole box, OUT where ``F <= 0``, else BOUNDARY."""
