@@ -264,6 +264,8 @@ def test_3d_titles_have_three_digits_and_legends_are_opaque():
 def test_delta_slices_cut_heights(tmp_path):
     """A translational mechanism (x, y, z): slices across z, by default four through
     the leaves that may hold W, titled with the height; the CLI takes --z, not --phi."""
+    import re
+
     delta = analyze("examples/delta.toml", precision=0.1, resolve=False)
     fig = plot_slices(delta)
     titles = [ax.get_title() for ax in fig.axes[:4]]
@@ -276,9 +278,12 @@ def test_delta_slices_cut_heights(tmp_path):
     for ax in fig.axes[:4]:
         assert any(len(c.get_paths()) for c in ax.collections if c.get_gid())
     plt.close(fig)
-    fig = plot_slices(delta, phis=[-0.8])
-    assert fig.axes[0].get_title() == "z = -0.8"
+    fig = plot_slices(delta, phis=[-0.8, -0.612345])
+    assert [ax.get_title() for ax in fig.axes[:2]] == ["z = -0.8", "z = -0.612"]
     plt.close(fig)
+    # the default heights, too, with three significant digits at most
+    for number in re.findall(r"\d+\.\d+", " ".join(titles)):
+        assert len(number.replace(".", "").lstrip("0")) <= 3, titles
     fig = plot_regions_3d(delta)
     assert fig.axes[0].get_zlabel() == "z (length units)"
     plt.close(fig)

@@ -4,7 +4,7 @@ the answers about poses.
 :mod:`.sheets` certifies the posture sheets over the cells of the workspace,
 :mod:`.regions` joins them into certain and possible components, :mod:`.flows`
 proves that no region hides in the undecided cells, :mod:`.joint_space` counts
-the regions of two-dyad mechanisms in their joint space, :mod:`.result` holds
+the regions of two-dyad mechanisms and the Delta in their joint space, :mod:`.result` holds
 :func:`analyze` and :class:`Analysis` (regions, counts, point queries),
 :mod:`.saved` writes and reads analyses,
 :mod:`.planning` plans motions inside a region and :mod:`.wxq` builds the

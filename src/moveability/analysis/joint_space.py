@@ -34,6 +34,14 @@ quadtree of Q:
 
 Only the cells of possible components whose count is still open are refined,
 one level a round, until the bounds meet or a budget is spent.
+
+The Delta robot has the same structure in a 3-D joint space: given q, the
+platform's centre lies on three spheres of radius ``lb`` about centres
+``c_i(q_i)``; there are two poses, one for each sign of det A, exactly where the
+centres are not collinear and their circumradius is below ``lb`` (see
+:class:`moveability.mechanisms.delta.Circumradius`, a function ``F`` with ``D =
+{F > 0}``, which its ``joint_condition`` gives). The same octree count applies,
+with one bound and the flows along the directions of three axes.
 """
 
 from __future__ import annotations
@@ -53,14 +61,18 @@ from ..mechanisms.base import Mechanism
 from ..types import Array
 from .flows import attached_nodes, face_neighbours, flow_directions
 
-__all__ = ["JointSpaceCount", "count_in_joint_space", "has_dyads"]
+__all__ = ["JointSpaceCount", "count_in_joint_space", "has_dyads", "joint_condition"]
 
-#: depth of the first, uniform pass over each joint axis
+#: depth of the first, uniform pass over each joint axis (two joints, three)
 START_DEPTH = 6
-#: deepest level of the refinement on each joint axis
+START_DEPTH_3D = 4
+#: deepest level of the refinement on each joint axis (two joints, three: the
+#: keys hold 62 bits)
 MAX_DEPTH = 26
-#: leaves the quadtree of Q may hold
+MAX_DEPTH_3D = 20
+#: leaves the tree of Q may hold (two joints, three)
 MAX_LEAVES = 1 << 16
+MAX_LEAVES_3D = 1 << 19
 #: levels above a leaf at which a convex block is sought, and the most leaves tried
 _BLOCK_LEVELS = 4
 _BLOCK_LEAVES = 256
@@ -110,6 +122,27 @@ def has_dyads(mechanism: Mechanism) -> bool:
         and len(legs) == 2
         and all(hasattr(leg, "knee_boxes") and hasattr(leg, "distal") for leg in legs)
     )
+
+
+def joint_condition(mechanism: Mechanism) -> Any:
+    """The function of the joints whose components count the regions, with its
+    bounds (``lower``, ``upper``), ``terms`` and ``classify``: the distance of
+    the knees of two dyads (:func:`has_dyads`), or a mechanism's own
+    ``joint_condition`` (the Delta); None for the others, or with constraints
+    beyond the paper's.
+
+    Examples
+    --------
+    >>> from moveability.mechanisms import Delta, FiveBar
+    >>> [type(joint_condition(m)).__name__ for m in (FiveBar(), Delta())]
+    ['_Distance', 'Circumradius']
+    """
+    if not mechanism.restrictions.empty:
+        return None
+    if has_dyads(mechanism):
+        return _Distance(mechanism)
+    own = getattr(mechanism, "joint_condition", None)
+    return own() if callable(own) else None
 
 
 def _joint_box(mechanism: Mechanism) -> tuple[Array, Array, tuple[int, ...]]:
@@ -173,29 +206,36 @@ class _Distance:
         return np.where(inside, IN, np.where(outside, OUT, BOUNDARY)).astype(np.uint8)
 
 
-def _attached(tree: HyperTree, leaves: Any, distance: _Distance) -> NDArray[np.bool_]:
+def _attached(tree: HyperTree, leaves: Any, distance: Any) -> NDArray[np.bool_]:
     """The undecided leaves whose every point of D reaches an IN leaf within D
     (``leaves`` are the tree's leaves)."""
     status = tree.status
     rows = np.flatnonzero(status == BOUNDARY)
     lo, hi = leaves.lo[rows], leaves.hi[rows]
+    k = tree.ndim
     with np.errstate(invalid="ignore", over="ignore"):
-        value, grad, (h11, h12, h22) = distance.terms(lo, hi)
+        value, grad, second = distance.terms(lo, hi)
         high = value.hi >= distance.upper.lo  # may meet the upper bound
         low = value.lo <= distance.lower.hi  # may meet the lower bound
-        vectors, exits = flow_directions(2)
-        n_flows = vectors.shape[0] + 1
+        vectors, exits = flow_directions(k)
+        # the convex (concave) test of two joints, from the Hessian, when given
+        hessian = k == 2 and len(second) == 3
+        n_flows = vectors.shape[0] + int(hessian)
         ok = np.zeros((rows.size, n_flows), dtype=bool)
         faces = np.zeros((n_flows, rows.size), dtype=np.uint8)
         for f, (v, fl) in enumerate(zip(vectors, exits, strict=True)):
-            rate = grad[0] * float(v[0]) + grad[1] * float(v[1])
+            rate = grad[0] * float(v[0])
+            for axis in range(1, k):
+                rate = rate + grad[axis] * float(v[axis])
             ok[:, f] = (~high | (rate.hi <= 0)) & (~low | (rate.lo >= 0))
             faces[f] = sum(1 << j for j in fl)
-        det = h11 * h22 - h12 * h12
-        convex = (h11.lo > 0) & (det.lo > 0)
-        concave = (h11.hi < 0) & (det.lo > 0)
-        ok[:, -1] = (convex & ~high) | (concave & ~low)
-        faces[-1] = 0b1111
+        if hessian:
+            h11, h12, h22 = second
+            det = h11 * h22 - h12 * h12
+            convex = (h11.lo > 0) & (det.lo > 0)
+            concave = (h11.hi < 0) & (det.lo > 0)
+            ok[:, -1] = (convex & ~high) | (concave & ~low)
+            faces[-1] = 0b1111
     weights = np.left_shift(np.uint64(1), np.arange(n_flows, dtype=np.uint64))
     bits = (ok.astype(np.uint64) * weights).sum(axis=1, dtype=np.uint64)[:, None]
     nodes = np.stack([rows, np.zeros_like(rows)], axis=1)
@@ -212,6 +252,8 @@ def _attached(tree: HyperTree, leaves: Any, distance: _Distance) -> NDArray[np.b
             neighbours,
         )[:, 0]
         attached |= found
+        if not hessian:
+            return attached
         blocks = _convex_blocks(tree, distance, neighbours, done | attached)
         if not blocks.any():
             return attached
@@ -269,15 +311,17 @@ def _convex_blocks(
 def count_in_joint_space(
     mechanism: Mechanism,
     *,
-    max_depth: int = MAX_DEPTH,
-    max_leaves: int = MAX_LEAVES,
+    max_depth: int | None = None,
+    max_leaves: int | None = None,
 ) -> JointSpaceCount | None:
-    """Certified bounds on the number of regions of a two-dyad mechanism.
+    """Certified bounds on the number of regions of a two-dyad mechanism or a Delta.
 
-    Returns None for a mechanism that is not two dyads (see :func:`has_dyads`).
-    The quadtree of Q starts uniform at depth ``START_DEPTH`` and is refined
-    where the count stays open, one level a round, to ``max_depth`` per axis
-    or ``max_leaves`` leaves: a deterministic budget.
+    Returns None for other mechanisms (see :func:`joint_condition`). The tree
+    of Q starts uniform at depth ``START_DEPTH`` (``START_DEPTH_3D`` for three
+    joints) and is refined where the count stays open, one level a round, to
+    ``max_depth`` per axis (by default ``MAX_DEPTH``, or ``MAX_DEPTH_3D``) or
+    ``max_leaves`` leaves (by default ``MAX_LEAVES``, or ``MAX_LEAVES_3D``): a
+    deterministic budget.
 
     Notes
     -----
@@ -295,10 +339,15 @@ def count_in_joint_space(
     >>> found.at_least, found.at_most
     (2, 2)
     """
-    if not has_dyads(mechanism) or not mechanism.restrictions.empty:
+    distance = joint_condition(mechanism)
+    if distance is None:
         return None
-    distance = _Distance(mechanism)
     lo, hi, periodic = _joint_box(mechanism)
+    k = lo.size
+    if max_leaves is None:
+        max_leaves = MAX_LEAVES if k == 2 else MAX_LEAVES_3D
+    if max_depth is None:
+        max_depth = MAX_DEPTH if k == 2 else MAX_DEPTH_3D
     tree = HyperTree.build(
         lo,
         hi,
@@ -306,12 +355,13 @@ def count_in_joint_space(
         max_depth=max_depth,
         periodic=periodic,
         merge=False,
-        stop_level=START_DEPTH,
+        stop_level=START_DEPTH if k == 2 else START_DEPTH_3D,
         max_leaves=max_leaves,
     )
     while True:
-        possible, n_possible = components(tree, status=IN | BOUNDARY, connectivity=2)
-        certain, n_certain = components(tree, status=IN, connectivity=2)
+        # closed cells touching at a corner: the IN ones share a point of D (open)
+        possible, n_possible = components(tree, status=IN | BOUNDARY, connectivity=k)
+        certain, n_certain = components(tree, status=IN, connectivity=k)
         undecided = tree.status == BOUNDARY
         leaves = tree.leaves()
         loose = undecided & ~_attached(tree, leaves, distance)
@@ -330,7 +380,7 @@ def count_in_joint_space(
         volumes = np.prod(leaves.hi - leaves.lo, axis=1)
         open_measure = float(volumes[mask].sum())
         mask &= tree.levels < tree.layout.n_levels
-        room = (max_leaves - len(tree)) // 3
+        room = (max_leaves - len(tree)) // ((1 << k) - 1)
         if at_least == at_most or not mask.any() or int(mask.sum()) > room:
             return JointSpaceCount(
                 at_least=2 * at_least,

@@ -37,7 +37,7 @@ from .flows import (
     slot_spans,
     supports_flows,
 )
-from .joint_space import JointSpaceCount, count_in_joint_space, has_dyads
+from .joint_space import JointSpaceCount, count_in_joint_space, joint_condition
 from .regions import RegionGraph, region_graph
 from .sheets import SheetTable, classify_sheets, stack_tables
 
@@ -189,9 +189,9 @@ def analyze(
     resolve : bool, optional
         After the pass at the precision, refine below it, one level a round,
         only the leaves that keep the count of regions or N-connectivity open
-        (see :func:`resolve_analysis`); the default. For the five-bar and the
-        biglide the count of regions is also proved in the joint space (see
-        :mod:`moveability.analysis.joint_space`), which often ends the refinement
+        (see :func:`resolve_analysis`); the default. For the five-bar, the
+        biglide and the Delta the count of regions is also proved in the joint
+        space (see :mod:`moveability.analysis.joint_space`), which often ends the refinement
         early. False keeps the plain pass. Mechanisms whose legs give no
         rates (see :func:`moveability.analysis.flows.supports_flows`) keep the plain
         pass.
@@ -273,11 +273,11 @@ def analyze(
             f"a precision whose tree holds at most max_leaves={max_leaves} leaves",
             precision,
         ) from None
-    # two dyads: the count is also proved in the joint space (see moveability.analysis.joint_space)
+    # two dyads, the Delta: the count is also proved in the joint space (see joint_space)
     joint = None
     # the joint-space count knows the paper's hypotheses only
     paper = mechanism.restrictions.empty
-    if resolve and not generalized_aspects and has_dyads(mechanism) and paper:
+    if resolve and not generalized_aspects and joint_condition(mechanism) is not None and paper:
         phase(progress, "counting the regions in the joint space")
         joint = count_in_joint_space(mechanism)
     phase(progress, "joining the regions")
@@ -635,7 +635,7 @@ class Analysis:
     ) -> None:
         self.mechanism = mechanism
         self.generalized_aspects = bool(generalized_aspects)
-        #: bounds on the count proved in the joint space (two-dyad mechanisms), if sought
+        #: bounds on the count proved in the joint space (two-dyad mechanisms, the Delta), if sought
         self.joint_count = joint_count
         #: per pose axis
         self.precisions = check_precision(precision, len(mechanism.pose_names))
@@ -937,7 +937,7 @@ class Analysis:
         (each holds a region of its own); ``at_most`` counts the certified parts,
         and is None (no bound) while a region may hide in an open node (see
         :mod:`moveability.analysis.flows`). Where :attr:`joint_count` holds bounds proved
-        in the joint space (two-dyad mechanisms, with the resolution on), the
+        in the joint space (two-dyad mechanisms and the Delta, with the resolution on), the
         tighter of both are given. The count is known when they are equal.
 
         Examples

@@ -72,7 +72,7 @@ from .base import (
     round_up,
 )
 
-__all__ = ["Delta", "DeltaLeg"]
+__all__ = ["Circumradius", "Delta", "DeltaLeg"]
 
 _JOINTS = ("theta1", "theta2", "theta3")
 _PARAMETERS = ("base_radius", "platform_radius", "arm", "rod")
@@ -293,6 +293,16 @@ class DeltaLeg:
         t = iv.sqrt(iv.square(s) + iv.square(z))
         g_lo, g_hi = self._g_range(t, iv.square(d))
         return g_lo, g_hi, t.lo
+
+    def branch_boxes(self, lo: Array, hi: Array, branch: int) -> Interval:
+        """Enclosure of the joint of ``branch`` over boxes where the leg is regular
+        (as :meth:`reach` gives it; meaningless elsewhere)."""
+        s, d, z = self._plane_boxes(lo, hi)
+        t = iv.sqrt(iv.square(s) + iv.square(z))
+        g_lo, g_hi = self._g_range(t, iv.square(d))
+        alpha = iv.arccos(Interval(g_lo, g_hi))
+        direction = self._direction(s, -z)
+        return direction + alpha if branch == 0 else direction - alpha
 
     def reach(self, lo: Array, hi: Array) -> LegReach:
         """Reachability and angle enclosures of the leg over boxes ``[lo, hi]`` (n, 3).
@@ -524,6 +534,127 @@ class DeltaLeg:
         return np.stack([x0, a0, a1, a1 + t_in * (target - a1)])
 
 
+def _cross(a: list[Interval], b: list[Interval]) -> list[Interval]:
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _dot(a: list[Interval], b: list[Interval]) -> Interval:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _minus(a: list[Interval], b: list[Interval]) -> list[Interval]:
+    return [x - y for x, y in zip(a, b, strict=True)]
+
+
+def _no_nan(x: Interval) -> Interval:
+    """``x`` with NaN bounds made infinite (none is expected: every term is
+    bounded; a NaN bound would say nothing, and compare false)."""
+    return Interval(np.where(np.isnan(x.lo), -_INF, x.lo), np.where(np.isnan(x.hi), _INF, x.hi))
+
+
+class Circumradius:
+    """The Delta's condition in the joint space: ``F(q) > 0`` where
+
+    ``F = 4 lb^2 |a x b|^2 - |a|^2 |b|^2 |a - b|^2``, ``a = c_1 - c_3``,
+    ``b = c_2 - c_3``,
+
+    ``c_i(theta_i) = E_i - r u_i = (R - r + la cos theta_i) u_i - la sin theta_i
+    e_z`` the centres of the spheres the platform's centre lies on. ``|a|^2
+    |b|^2 |a - b|^2 / (4 |a x b|^2)`` is the square of their circumradius
+    ``rho``: ``F > 0`` iff the centres are not collinear and ``rho < lb``. Then
+    the platform's centre is one of two poses, at the height ``sqrt(lb^2 -
+    rho^2)`` on either side of the centres' plane, continuous in q, and det A
+    (rows ``P - c_i``) is that signed height times ``|a x b|``: not zero. Where
+    ``F <= 0`` no pose has det A != 0. So the regions are the components of
+    ``{q : F(q) > 0}`` in the box of joint ranges, twice (see
+    :mod:`moveability.analysis.joint_space`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability.intervals import Interval
+    >>> f = Circumradius(Delta(10.0, 4.0, 8.0, 15.0))
+    >>> q = np.array([[0.3, 0.5, 0.7]])
+    >>> value, grad, _ = f.terms(q, q)
+    >>> bool(value.lo[0] > 0), len(grad)
+    (True, 3)
+    """
+
+    def __init__(self, delta: Delta) -> None:
+        self.legs = delta.delta_legs
+        self.rod = delta.rod
+        self.arm = delta.arm
+        #: ``F`` must lie above ``lower`` (and below ``upper``: no bound)
+        self.lower = Interval(0.0)
+        self.upper = Interval(_INF)
+
+    def _centres(self, lo: Array, hi: Array) -> tuple[list[list[Interval]], list[list[Interval]]]:
+        """The centres ``c_i`` and their derivatives ``dc_i / dtheta_i`` over boxes."""
+        centres, rates = [], []
+        for i, leg in enumerate(self.legs):
+            angle = Interval(lo[:, i], hi[:, i])
+            centres.append(leg.centre_boxes(angle))
+            _, (ux, uy) = _unit(i)
+            sin_a = iv.sin(angle) * self.arm
+            rates.append([-(sin_a * ux), -(sin_a * uy), -(iv.cos(angle) * self.arm)])
+        return centres, rates
+
+    def _value(self, c: list[list[Interval]]) -> tuple[Interval, Any]:
+        a, b = _minus(c[0], c[2]), _minus(c[1], c[2])
+        ab = _minus(a, b)
+        n = _cross(a, b)
+        big_a, big_b, big_c = _dot(a, a), _dot(b, b), _dot(ab, ab)
+        four_lb2 = iv.square(iv.as_interval(self.rod)) * 4.0
+        value = four_lb2 * _dot(n, n) - big_a * big_b * big_c
+        return value, (a, b, ab, n, big_a, big_b, big_c, four_lb2)
+
+    def terms(
+        self, lo: Array, hi: Array, hessian: bool = True
+    ) -> tuple[Interval, list[Interval], list[Interval]]:
+        """``F`` over boxes of joints (natural and mean-value forms intersected) and
+        its gradient; no Hessian (an empty list)."""
+        c, dc = self._centres(lo, hi)
+        natural, (a, b, ab, n, big_a, big_b, big_c, k) = self._value(c)
+        # dF/dtheta_1: a' = c_1', b' = 0, (a - b)' = c_1'
+        g1 = (
+            k * _dot(n, _cross(dc[0], b)) * 2.0
+            - _dot(a, dc[0]) * big_b * big_c * 2.0
+            - big_a * big_b * _dot(ab, dc[0]) * 2.0
+        )
+        # dF/dtheta_2: b' = c_2', (a - b)' = -c_2'
+        g2 = (
+            k * _dot(n, _cross(a, dc[1])) * 2.0
+            - big_a * _dot(b, dc[1]) * big_c * 2.0
+            + big_a * big_b * _dot(ab, dc[1]) * 2.0
+        )
+        # dF/dtheta_3: a' = b' = -c_3', (a - b)' = 0
+        turned = [x + y for x, y in zip(_cross(dc[2], b), _cross(a, dc[2]), strict=True)]
+        g3 = (
+            -(k * _dot(n, turned) * 2.0)
+            + _dot(a, dc[2]) * big_b * big_c * 2.0
+            + big_a * _dot(b, dc[2]) * big_c * 2.0
+        )
+        grad = [g1, g2, g3]
+        mid = 0.5 * lo + 0.5 * hi
+        mean, _ = self._value(self._centres(mid, mid)[0])
+        with _quiet():
+            for i in range(3):
+                mean = mean + grad[i] * (Interval(lo[:, i], hi[:, i]) - mid[:, i])
+        good = np.isfinite(mean.lo) & np.isfinite(mean.hi)
+        value = Interval(
+            np.where(good, np.maximum(natural.lo, mean.lo), natural.lo),
+            np.where(good, np.minimum(natural.hi, mean.hi), natural.hi),
+        )
+        return _no_nan(value), [_no_nan(g) for g in grad], []
+
+    def classify(self, lo: Array, hi: Array) -> NDArray[np.uint8]:
+        """IN where ``F > 0`` over the whole box, OUT where ``F <= 0``, else BOUNDARY."""
+        from ..hypertree.status import BOUNDARY, IN, OUT
+
+        value, _, _ = self.terms(lo, hi, hessian=False)
+        return np.where(value.lo > 0, IN, np.where(value.hi <= 0, OUT, BOUNDARY)).astype(np.uint8)
+
+
 def _length(name: str, value: object) -> float:
     try:
         v = float(value)  # type: ignore[arg-type]
@@ -620,7 +751,57 @@ class Delta(Mechanism):
     ) -> Interval:
         """Enclosure of det A over boxes: the rows stacked, intersected with
         ``(P - c_1) . ((c_1 - c_2) x (c_1 - c_3))`` (rows subtracted; ``c_i`` the
-        sphere centres, which depend on the joints only: the pose occurs once)."""
+        sphere centres, which depend on the joints only: the pose occurs once).
+
+        With the ``posture``, over boxes where every leg is regular (its branch a
+        smooth function of the pose over the whole box, ``angles`` its
+        enclosure), also the mean-value form along the sheet, ``D(m) + sum_j
+        dD/dx_j (x_j - m_j)`` about the centre ``m``: ``dD/dx_j`` is the rate of
+        det A along ``e_j`` with the joints at their gradients' rates
+        (:meth:`det_a_rate`). It is far narrower on small boxes, where the
+        natural form counts the joints' spread several times.
+        """
+        out = self._det_a_plain(lo, hi, angles)
+        if posture is None or not lo.shape[0]:
+            return out
+        branches = self.postures[posture]
+        regular = np.ones(lo.shape[0], dtype=bool)
+        for leg in self.delta_legs:
+            g_lo, g_hi, t_lo = leg._g_boxes(lo, hi)
+            regular &= (t_lo > 0) & (g_lo > -1.0) & (g_hi < 1.0)
+        idx = np.flatnonzero(regular)
+        if not idx.size:
+            return out
+        blo, bhi = lo[idx], hi[idx]
+        mid = 0.5 * blo + 0.5 * bhi
+        box_angles = [Interval(a.lo[idx], a.hi[idx]) for a in angles]
+        centre_angles = [
+            leg.branch_boxes(mid, mid, int(branches[i])) for i, leg in enumerate(self.delta_legs)
+        ]
+        with _quiet():
+            total = self._det_a_plain(mid, mid, centre_angles)
+            gradients = [
+                leg.joint_gradient(blo, bhi, int(branches[i]), box_angles[i])
+                for i, leg in enumerate(self.delta_legs)
+            ]
+            known = self.rows_and_partials(blo, bhi, box_angles)
+            n = idx.size
+            for axis in range(3):
+                along = [Interval(np.full(n, float(axis == j))) for j in range(3)]
+                rate = self.det_a_rate(
+                    blo, bhi, box_angles, along, [g[axis] for g in gradients], known
+                )
+                assert rate is not None
+                total = total + rate * (Interval(blo[:, axis], bhi[:, axis]) - mid[:, axis])
+        good = np.isfinite(total.lo) & np.isfinite(total.hi)
+        lo_out, hi_out = out.lo.copy(), out.hi.copy()
+        lo_out[idx] = np.where(good, np.maximum(out.lo[idx], total.lo), out.lo[idx])
+        hi_out[idx] = np.where(good, np.minimum(out.hi[idx], total.hi), out.hi[idx])
+        return Interval(lo_out, hi_out)
+
+    def _det_a_plain(self, lo: Array, hi: Array, angles: list[Interval]) -> Interval:
+        """det A over boxes and joint enclosures: the natural form and the centres'
+        form intersected (see :meth:`det_a_boxes`)."""
         rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.delta_legs)]
         natural = interval_det(rows)
         c = [leg.centre_boxes(angles[i]) for i, leg in enumerate(self.delta_legs)]
@@ -653,6 +834,11 @@ class Delta(Mechanism):
             f"Delta(base_radius={self.base_radius:g}, platform_radius={self.platform_radius:g}, "
             f"arm={self.arm:g}, rod={self.rod:g}, limits={self.limits})"
         )
+
+    def joint_condition(self) -> Circumradius:
+        """The condition whose components in the joint space are the regions (see
+        :class:`Circumradius` and :mod:`moveability.analysis.joint_space`)."""
+        return Circumradius(self)
 
     def folds_connected(self, legs: tuple[int, ...], lo: Array, hi: Array) -> NDArray[np.bool_]:
         """Several legs folding in one box: nothing certified."""

@@ -31,6 +31,7 @@ from .axes import (
     panels,
     precision_text,
     pyplot,
+    significant,
 )
 
 if TYPE_CHECKING:
@@ -67,10 +68,12 @@ def _region_label(result: Analysis, index: int) -> str:
 
 
 def _angle_text(mechanism: Any, axis: int, value: float) -> str:
+    """A slice's title: a periodic angle in degrees, a length (the Delta's height)
+    with three significant digits, as the other titles give numbers."""
     name = mechanism.pose_names[axis]
     if axis in mechanism.periodic_axes:
         return f"{name} = {np.degrees(value):.4g}\N{DEGREE SIGN}"
-    return f"{name} = {value:.4g}"
+    return f"{name} = {significant(value)}"
 
 
 # ------------------------------------------------------------------- slices
