@@ -207,3 +207,13 @@ def test_cells_keep_every_possible_component_while_regions_may_be_missing():
     cells = page_cells(result, max_cells=30_000)
     assert cells.layout.n_extra > 0
     _check_against_library(result, cells, _poses(result, 300, 3), exact=not cells.coarse)
+
+
+def test_user_defined_passive_limits_are_written_in_pi():
+    spec = load_spec("examples/five-bar-custom-passive.toml")
+    spec["legs"][0]["passive"]["C"]["limits"] = [-math.pi / 2, math.pi]
+    mechanism = from_spec(spec)
+    text = spec_toml(mechanism)
+    assert 'limits = ["-pi/2", "pi"]' in text
+    back = from_spec(tomllib.loads(text)).to_spec()
+    assert back["legs"][0]["passive"] == mechanism.to_spec()["legs"][0]["passive"]

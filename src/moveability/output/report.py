@@ -148,6 +148,10 @@ def _with_angles(spec: Mapping[str, Any], mechanism: Mechanism) -> dict[str, Any
     if isinstance(passive, Mapping):
         # passive joints are revolute
         out["passive_limits"] = {joint: [_angle(v) for v in lim] for joint, lim in passive.items()}
+    legs = spec.get("legs")
+    if isinstance(legs, Sequence) and not isinstance(legs, str):
+        # a user-defined leg's passive angles: { angle = "...", limits = [lo, hi] }
+        out["legs"] = [_with_passive_angles(leg) for leg in legs]
     bounds = spec.get("bounds")
     periodic = set(spec.get("periodic") or ())
     if isinstance(bounds, Mapping) and periodic:
@@ -156,6 +160,21 @@ def _with_angles(spec: Mapping[str, Any], mechanism: Mechanism) -> dict[str, Any
             for name, pair in bounds.items()
         }
     return out
+
+
+def _with_passive_angles(leg: Any) -> Any:
+    """A user-defined leg's table with its passive limits as multiples of pi
+    where they are."""
+    passive = leg.get("passive") if isinstance(leg, Mapping) else None
+    if not isinstance(passive, Mapping):
+        return leg
+    angles = {}
+    for name, entry in passive.items():
+        limits = entry.get("limits") if isinstance(entry, Mapping) else None
+        if isinstance(limits, Sequence) and not isinstance(limits, str):
+            entry = {**entry, "limits": [_angle(v) for v in limits]}
+        angles[name] = entry
+    return {**leg, "passive": angles}
 
 
 def spec_toml(mechanism: Mechanism) -> str:
