@@ -69,6 +69,8 @@ _SPAN_TOL = 1e-9
 #: of a cluster around a corner (two stops and the singular surface of a 3-RPR
 #: span about ten leaves) then share one direction and never wait on each other
 _NEAR = 16.0
+#: the count of a slot's flow that may cross a face never crossed: never reaches 0
+_NEVER = np.iinfo(np.int64).max // 2
 
 
 class FaceNeighbours:
@@ -114,20 +116,61 @@ def face_neighbours(tree: HyperTree, pairs: NDArray[np.intp] | None = None) -> F
         if not periodic[axis]:
             open_faces[:, 2 * axis] = ends[:, axis] == extent[axis]
             open_faces[:, 2 * axis + 1] = anchors[:, axis] == 0
-    both = np.concatenate([pairs, pairs[:, ::-1]]) if pairs.size else pairs.reshape(0, 2)
-    a, b = both[:, 0], both[:, 1]
-    out: list[NDArray[np.int64]] = []
-    for axis in range(k):
-        end_a = ends[a, axis]
-        end_b = ends[b, axis]
-        if periodic[axis]:
-            end_a = end_a % extent[axis]
-            end_b = end_b % extent[axis]
-        plus = end_a == anchors[b, axis]
-        minus = anchors[a, axis] == end_b
-        out.append(both[plus].astype(np.int64))
-        out.append(both[minus].astype(np.int64))
+    flat, ptr = _face_sides(
+        np.ascontiguousarray(pairs.reshape(-1, 2), dtype=np.int64),
+        np.ascontiguousarray(anchors, dtype=np.int64),
+        np.ascontiguousarray(ends, dtype=np.int64),
+        extent,
+        periodic,
+    )
+    out = [flat[ptr[d] : ptr[d + 1]] for d in range(2 * k)]
     return FaceNeighbours(out, open_faces)
+
+
+@njit(cache=True, nogil=True)
+def _face_sides(
+    pairs: NDArray[np.int64],
+    anchors: NDArray[np.int64],
+    ends: NDArray[np.int64],
+    extent: NDArray[np.int64],
+    periodic: NDArray[np.bool_],
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
+    """The face-adjacent pairs ``(a, b)`` (each pair both ways: all of them as
+    given, then all reversed) by the side of ``a`` that ``b`` lies across:
+    ``(flat, ptr)``, direction ``d``'s pairs being ``flat[ptr[d]:ptr[d + 1]]``,
+    in that order."""
+    m = pairs.shape[0]
+    k = anchors.shape[1]
+    count = np.zeros(2 * k, dtype=np.int64)
+    ptr = np.zeros(2 * k + 1, dtype=np.int64)
+    flat = np.empty((0, 2), dtype=np.int64)
+    for step in range(2):
+        if step == 1:
+            for d in range(2 * k):
+                ptr[d + 1] = ptr[d] + count[d]
+            flat = np.empty((ptr[2 * k], 2), dtype=np.int64)
+            count[:] = 0
+        for half in range(2):
+            for e in range(m):
+                a = pairs[e, half]
+                b = pairs[e, 1 - half]
+                for axis in range(k):
+                    end_a = ends[a, axis]
+                    end_b = ends[b, axis]
+                    if periodic[axis]:
+                        end_a = end_a % extent[axis]
+                        end_b = end_b % extent[axis]
+                    for d in (2 * axis, 2 * axis + 1):
+                        # +e_axis: b starts where a ends; -e_axis: a starts where b ends
+                        plus = end_a == anchors[b, axis]
+                        minus = anchors[a, axis] == end_b
+                        if not (plus if d == 2 * axis else minus):
+                            continue
+                        if step == 1:
+                            flat[ptr[d] + count[d], 0] = a
+                            flat[ptr[d] + count[d], 1] = b
+                        count[d] += 1
+    return flat, ptr
 
 
 def supports_flows(mechanism: Mechanism) -> bool:
@@ -403,17 +446,26 @@ def _posture_flows(
                 rates.append(rate)
                 rising.append(up)
                 falling.append(down)
-            det_rate = mechanism.det_a_rate(
-                blo, bhi, angles, field.velocity, rates, rows_and_partials=known
-            )
             # passive limits, obstacles, collisions that may be active stay kept
             kept = _kept(mechanism, margins, blo, bhi, angles, field.velocity, rates)
+        slot_oks = []
         for c in range(slots):
             slot_ok = ok.copy()
             for i in range(n_legs):
                 _, lower, upper = pieces[i]
                 j = combos[c][i]
                 slot_ok &= (~lower[j] | rising[i]) & (~upper[j] | falling[i])
+            slot_oks.append(slot_ok)
+        # the rate of det A decides a flow only where a slot and a sign may flow
+        # otherwise: elsewhere it is left out (NaN), which changes no flow
+        need = np.logical_or.reduce(slot_oks) & (
+            (kept[0] & (sign != 1)) | (kept[1] & (sign != -1))
+        )
+        with quiet():
+            det_rate = _det_rate_where(
+                mechanism, blo, bhi, angles, field.velocity, rates, known, need
+            )
+        for c, slot_ok in enumerate(slot_oks):
             for row, s in enumerate((1, -1)):
                 steady = sign == s
                 if det_rate is not None:
@@ -450,6 +502,57 @@ def _kept(
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         moving = mechanism.linkage_velocities(lo, hi, angles, velocity, rates)
         return margins.kept(moving, 1), margins.kept(moving, -1)
+
+
+def _take(x: Interval, at: NDArray[np.intp], n: int) -> Interval:
+    """The enclosures of ``x`` (one per box of ``n``, or one for all) at boxes ``at``."""
+    if x.lo.ndim and x.lo.shape[0] == n:
+        return Interval(x.lo[at], x.hi[at])
+    return x
+
+
+def _det_rate_where(
+    mechanism: Mechanism,
+    lo: Array,
+    hi: Array,
+    angles: list[Interval],
+    velocity: list[Interval],
+    rates: list[Interval],
+    known: Any,
+    need: Any,
+) -> Interval | None:
+    """:meth:`~moveability.mechanisms.base.Mechanism.det_a_rate` over the boxes
+    where ``need`` holds, NaN elsewhere (no comparison holds there): the same
+    bounds where it is computed, every operation being one box's own."""
+    n = lo.shape[0]
+    need = np.broadcast_to(np.asarray(need, dtype=bool), (n,))
+    if need.all():
+        return mechanism.det_a_rate(lo, hi, angles, velocity, rates, rows_and_partials=known)
+    if known is None:
+        return None
+    at = np.flatnonzero(need)
+    out_lo, out_hi = np.full(n, np.nan), np.full(n, np.nan)
+    if at.size:
+        rows, partials = known
+        sub = mechanism.det_a_rate(
+            lo[at],
+            hi[at],
+            [_take(a, at, n) for a in angles],
+            [_take(v, at, n) for v in velocity],
+            [_take(r, at, n) for r in rates],
+            rows_and_partials=(
+                [[_take(x, at, n) for x in row] for row in rows],
+                [
+                    ([[_take(x, at, n) for x in entry] for entry in along_x],
+                     [_take(x, at, n) for x in along_q])
+                    for along_x, along_q in partials
+                ],
+            ),
+        )  # fmt: skip
+        if sub is None:
+            return None
+        out_lo[at], out_hi[at] = sub.lo, sub.hi
+    return Interval(out_lo, out_hi)
 
 
 def _widened(x: Interval) -> Interval:
@@ -497,11 +600,14 @@ def _adapted_flows(
             for i, leg in enumerate(mechanism.legs)
         ]
         det_at = []
+        # the rows and their partials at the centres, shared by the axes
+        known_at = mechanism.rows_and_partials(mid, mid, centre_angles)
         for axis in range(k):
             along = [Interval(np.full(n, float(axis == j))) for j in range(k)]
             rate = mechanism.det_a_rate(
-                mid, mid, centre_angles, along, [joint_at[i][axis] for i in range(n_legs)]
-            )
+                mid, mid, centre_angles, along, [joint_at[i][axis] for i in range(n_legs)],
+                rows_and_partials=known_at,
+            )  # fmt: skip
             if rate is None:
                 return
             det_at.append(rate.mid)
@@ -537,18 +643,20 @@ def _adapted_flows(
             velocity = [Interval(direction[:, axis]) for axis in range(k)]
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 rates = [_dot(gradients[i], velocity) for i in range(n_legs)]
-                det_rate = mechanism.det_a_rate(
-                    lo, hi, angles, velocity, rates, rows_and_partials=known
-                )
             ok = moving.copy()
             for i in range(n_legs):
                 _, lower, upper = pieces[i]
                 j = combos[c][i]
                 ok &= (~lower[j] | (rates[i].lo >= 0)) & (~upper[j] | (rates[i].hi <= 0))
+            kept = _kept(mechanism, margins, lo, hi, angles, velocity, rates)[row]
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                # the rate decides the flow only where the rest allows it (see _posture_flows)
+                det_rate = _det_rate_where(
+                    mechanism, lo, hi, angles, velocity, rates, known, ok & kept & (sign != s)
+                )
             steady = sign == s
             if det_rate is not None:
                 steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
-            kept = _kept(mechanism, margins, lo, hi, angles, velocity, rates)[row]
             index = first + 2 * c + row
             flows[row, :, c, index] = ok & steady & kept
             columns = [direction[:, axis] for axis in range(k)]
@@ -649,6 +757,120 @@ def _propagate(
                     break
 
 
+@njit(cache=True, nogil=True)
+def _dependencies(
+    pairs: NDArray[np.int64],
+    face_ptr: NDArray[np.int64],
+    node_row: NDArray[np.int64],
+    done: NDArray[np.bool_],
+    slot_done: NDArray[np.bool_],
+    spans: NDArray[np.float64],
+    open_faces: NDArray[np.bool_],
+) -> tuple[
+    NDArray[np.int64],
+    NDArray[np.bool_],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+]:  # pragma: no cover - compiled
+    """What each waiting slot waits on, for :func:`attached_nodes`.
+
+    ``pairs[face_ptr[f]:face_ptr[f + 1]]`` are the leaves ``(a, b)`` with ``b``
+    across ``a``'s face ``f``; ``node_row`` the row of each node (-1: none),
+    ``open_faces`` (m, faces) those of each row's leaf on the edge of the box.
+    Returns ``per_face`` (faces, m, slots): the slots across face ``f`` a slot
+    may land in that are waiting; ``never`` (faces, m): faces that can never be
+    crossed (the box's edge, or a node across neither done nor listed); and
+    the triples (row, slot, face) waiting on each slot ``sub = row * slots +
+    slot`` across, as ``dep_*[dep_ptr[sub]:dep_ptr[sub + 1]]`` (by face, pair,
+    posture, own slot, then slot across)."""
+    m, slots = slot_done.shape
+    n_post = done.shape[1]
+    n_faces = face_ptr.size - 1
+    n_legs = spans.shape[2]
+    per_face = np.zeros((n_faces, m, slots), dtype=np.int64)
+    never = np.zeros((n_faces, m), dtype=np.bool_)
+    dep_ptr = np.zeros(m * slots + 1, dtype=np.int64)
+    fill = np.zeros(m * slots, dtype=np.int64)
+    dep_row = np.empty(0, dtype=np.int64)
+    dep_slot = np.empty(0, dtype=np.int64)
+    dep_face = np.empty(0, dtype=np.int64)
+    for step in range(2):
+        if step == 1:
+            for sub in range(m * slots):
+                dep_ptr[sub + 1] = dep_ptr[sub] + fill[sub]
+                fill[sub] = 0
+            total = dep_ptr[m * slots]
+            dep_row = np.empty(total, dtype=np.int64)
+            dep_slot = np.empty(total, dtype=np.int64)
+            dep_face = np.empty(total, dtype=np.int64)
+        for f in range(n_faces):
+            for e in range(face_ptr[f], face_ptr[f + 1]):
+                a, b = pairs[e, 0], pairs[e, 1]
+                for p in range(n_post):
+                    ra, rb = node_row[a, p], node_row[b, p]
+                    if ra < 0 or done[b, p]:
+                        continue
+                    if rb < 0:
+                        # a node across that is neither done nor listed never attaches
+                        never[f, ra] = True
+                        continue
+                    for ca in range(slots):
+                        if slot_done[ra, ca]:
+                            continue
+                        for cb in range(slots):
+                            if slot_done[rb, cb]:
+                                continue
+                            # their joint ranges meet
+                            meet = True
+                            for j in range(n_legs):
+                                if not (
+                                    spans[ra, ca, j, 0] <= spans[rb, cb, j, 1] + _SPAN_TOL
+                                    and spans[rb, cb, j, 0] <= spans[ra, ca, j, 1] + _SPAN_TOL
+                                ):
+                                    meet = False
+                            if not meet:
+                                continue
+                            sub = rb * slots + cb
+                            if step == 0:
+                                per_face[f, ra, ca] += 1
+                            else:
+                                at = dep_ptr[sub] + fill[sub]
+                                dep_row[at] = ra
+                                dep_slot[at] = ca
+                                dep_face[at] = f
+                            fill[sub] += 1
+    for f in range(n_faces):
+        for r in range(m):
+            # a face on the edge of the box can never be crossed
+            never[f, r] |= open_faces[r, f]
+    return per_face, never, dep_ptr, dep_row, dep_slot, dep_face
+
+
+@njit(cache=True, nogil=True)
+def _waiting(
+    per_face: NDArray[np.int64], never: NDArray[np.bool_], faces: NDArray[np.uint8]
+) -> NDArray[np.int64]:  # pragma: no cover - compiled
+    """(flows, m, slots): how many slots across its exit faces each slot waits on
+    along each flow; a flow that may cross a face never crossed never attaches."""
+    n_faces, m, slots = per_face.shape
+    n_flows = faces.shape[0]
+    waiting = np.zeros((n_flows, m, slots), dtype=np.int64)
+    for d in range(n_flows):
+        for r in range(m):
+            stop = False
+            for f in range(n_faces):
+                if (faces[d, r] >> f) & 1:
+                    stop |= never[f, r]
+                    for c in range(slots):
+                        waiting[d, r, c] += per_face[f, r, c]
+            if stop:
+                for c in range(slots):
+                    waiting[d, r, c] = _NEVER
+    return waiting
+
+
 def slot_spans(
     table: SheetTable, nodes: NDArray[np.intp], limits: tuple[Any, ...]
 ) -> NDArray[np.float64]:
@@ -715,64 +937,35 @@ def attached_nodes(
     leaf, post = nodes[:, 0].astype(np.int64), nodes[:, 1].astype(np.int64)
     node_row = np.full((n, n_post), -1, dtype=np.int64)
     node_row[leaf, post] = np.arange(m)
-    slot_done = ~exists | done[leaf, post][:, None]
-    per_face = np.zeros((n_faces, m, slots), dtype=np.int64)
-    never = np.zeros((n_faces, m), dtype=bool)
-    dep_sub, dep_row, dep_slot, dep_face = [], [], [], []
-    for f in range(n_faces):
-        pairs = neighbours.pairs[f]
-        a = np.repeat(pairs[:, 0].astype(np.int64), n_post)
-        b = np.repeat(pairs[:, 1].astype(np.int64), n_post)
-        p = np.tile(np.arange(n_post, dtype=np.int64), pairs.shape[0])
-        ra, rb = node_row[a, p], node_row[b, p]
-        live = (ra >= 0) & ~done[b, p]
-        # a node across that is neither done nor listed never attaches
-        never[f, ra[live & (rb < 0)]] = True
-        live &= rb >= 0
-        ra, rb = ra[live], rb[live]
-        # (pair, own slot, slot across): both waiting, and their joint ranges meet
-        meet = ~slot_done[ra][:, :, None] & ~slot_done[rb][:, None, :]
-        if spans is not None and spans.shape[2]:
-            sa, sb = spans[ra][:, :, None], spans[rb][:, None, :]
-            meet &= (
-                (sa[..., 0] <= sb[..., 1] + _SPAN_TOL) & (sb[..., 0] <= sa[..., 1] + _SPAN_TOL)
-            ).all(axis=3)
-        e, ca, cb = np.nonzero(meet)
-        per_face[f] += np.bincount(ra[e] * slots + ca, minlength=m * slots).reshape(m, slots)
-        dep_sub.append(rb[e] * slots + cb)
-        dep_row.append(ra[e])
-        dep_slot.append(ca.astype(np.int64))
-        dep_face.append(np.full(e.size, f, dtype=np.int64))
-        # a face on the edge of the box can never be crossed
-        never[f] |= neighbours.open[leaf, f]
-    waiting = np.zeros((faces.shape[0], m, slots), dtype=np.int64)
-    for d in range(faces.shape[0]):
-        stop = np.zeros(m, dtype=bool)
-        for f in range(n_faces):
-            crosses = (faces[d] >> f) & 1 == 1
-            waiting[d] += np.where(crosses[:, None], per_face[f], 0)
-            stop |= crosses & never[f]
-        # a flow that may cross such a face never attaches anything
-        waiting[d][stop] = np.iinfo(np.int64).max // 2
-    sub = np.concatenate(dep_sub) if dep_sub else np.zeros(0, dtype=np.int64)
-    order = np.argsort(sub, kind="stable")
-    dep_ptr = np.zeros(m * slots + 1, dtype=np.int64)
-    dep_ptr[1:] = np.cumsum(np.bincount(sub, minlength=m * slots))
-
-    def flat(parts: list[NDArray[np.int64]]) -> NDArray[np.int64]:
-        out = np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
-        return np.ascontiguousarray(out[order].astype(np.int64))
-
-    slot_done = np.ascontiguousarray(slot_done)
+    slot_done = np.ascontiguousarray(~exists | done[leaf, post][:, None])
+    face_ptr = np.zeros(n_faces + 1, dtype=np.int64)
+    face_ptr[1:] = np.cumsum([neighbours.pairs[f].shape[0] for f in range(n_faces)])
+    all_pairs = (
+        np.concatenate([neighbours.pairs[f].reshape(-1, 2) for f in range(n_faces)])
+        if n_faces
+        else np.zeros((0, 2), dtype=np.int64)
+    )
+    if spans is None:
+        spans = np.zeros((m, slots, 0, 2))
+    per_face, never, dep_ptr, dep_row, dep_slot, dep_face = _dependencies(
+        np.ascontiguousarray(all_pairs, dtype=np.int64),
+        face_ptr,
+        node_row,
+        np.ascontiguousarray(done),
+        slot_done,
+        np.ascontiguousarray(spans, dtype=np.float64),
+        np.ascontiguousarray(neighbours.open[leaf]),
+    )
+    waiting = _waiting(per_face, never, np.ascontiguousarray(faces))
     _propagate(
         slot_done,
         np.ascontiguousarray(bits),
         waiting,
         np.ascontiguousarray(faces),
         dep_ptr,
-        flat(dep_row),
-        flat(dep_slot),
-        flat(dep_face),
+        dep_row,
+        dep_slot,
+        dep_face,
     )
     state = done.copy()
     state[leaf, post] |= slot_done.all(axis=1)
