@@ -504,13 +504,6 @@ def _kept(
         return margins.kept(moving, 1), margins.kept(moving, -1)
 
 
-def _take(x: Interval, at: NDArray[np.intp], n: int) -> Interval:
-    """The enclosures of ``x`` (one per box of ``n``, or one for all) at boxes ``at``."""
-    if x.lo.ndim and x.lo.shape[0] == n:
-        return Interval(x.lo[at], x.hi[at])
-    return x
-
-
 def _det_rate_where(
     mechanism: Mechanism,
     lo: Array,
@@ -533,22 +526,7 @@ def _det_rate_where(
     at = np.flatnonzero(need)
     out_lo, out_hi = np.full(n, np.nan), np.full(n, np.nan)
     if at.size:
-        rows, partials = known
-        sub = mechanism.det_a_rate(
-            lo[at],
-            hi[at],
-            [_take(a, at, n) for a in angles],
-            [_take(v, at, n) for v in velocity],
-            [_take(r, at, n) for r in rates],
-            rows_and_partials=(
-                [[_take(x, at, n) for x in row] for row in rows],
-                [
-                    ([[_take(x, at, n) for x in entry] for entry in along_x],
-                     [_take(x, at, n) for x in along_q])
-                    for along_x, along_q in partials
-                ],
-            ),
-        )  # fmt: skip
+        sub = mechanism.det_a_rate(lo, hi, angles, velocity, rates, rows_and_partials=known, at=at)
         if sub is None:
             return None
         out_lo[at], out_hi[at] = sub.lo, sub.hi
