@@ -69,8 +69,6 @@ _SPAN_TOL = 1e-9
 #: of a cluster around a corner (two stops and the singular surface of a 3-RPR
 #: span about ten leaves) then share one direction and never wait on each other
 _NEAR = 16.0
-#: the count of a slot's flow that may cross a face never crossed: never reaches 0
-_NEVER = np.iinfo(np.int64).max // 2
 
 
 class FaceNeighbours:
@@ -82,9 +80,17 @@ class FaceNeighbours:
     that face lies on the edge of the pose box.
     """
 
-    def __init__(self, pairs: list[NDArray[np.int64]], open_faces: NDArray[np.bool_]) -> None:
+    def __init__(
+        self,
+        pairs: list[NDArray[np.int64]],
+        open_faces: NDArray[np.bool_],
+        flat: tuple[NDArray[np.int64], NDArray[np.int64]] | None = None,
+    ) -> None:
         self.pairs = pairs
         self.open = open_faces
+        #: all the pairs, direction by direction, and where each direction's start
+        #: (``pairs[d]`` is ``flat[0][flat[1][d]:flat[1][d + 1]]``), when known
+        self.flat = flat
 
 
 def face_neighbours(tree: HyperTree, pairs: NDArray[np.intp] | None = None) -> FaceNeighbours:
@@ -124,7 +130,7 @@ def face_neighbours(tree: HyperTree, pairs: NDArray[np.intp] | None = None) -> F
         periodic,
     )
     out = [flat[ptr[d] : ptr[d + 1]] for d in range(2 * k)]
-    return FaceNeighbours(out, open_faces)
+    return FaceNeighbours(out, open_faces, (flat, ptr))
 
 
 @njit(cache=True, nogil=True)
@@ -688,11 +694,30 @@ def into_corner(normals: Array) -> Array:
     return np.where((good & np.isfinite(dual).all(axis=1))[:, None], dual, total)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _ready(
+    d: int,
+    r: int,
+    c: int,
+    faces: NDArray[np.uint8],
+    remaining: NDArray[np.int64],
+    never: NDArray[np.bool_],
+) -> bool:  # pragma: no cover - compiled
+    """Whether slot ``(r, c)`` waits on nothing across the exit faces of flow ``d``
+    (and none of them is a face never crossed)."""
+    mask = faces[d, r]
+    for f in range(remaining.shape[0]):
+        if (mask >> f) & 1 and (never[f, r] or remaining[f, r, c] != 0):
+            return False
+    return True
+
+
 @njit(cache=True, nogil=True)
 def _propagate(
     slot_done: NDArray[np.bool_],
     bits: NDArray[np.uint64],
-    waiting: NDArray[np.int64],
+    remaining: NDArray[np.int64],
+    never: NDArray[np.bool_],
     faces: NDArray[np.uint8],
     dep_ptr: NDArray[np.int64],
     dep_row: NDArray[np.int64],
@@ -700,7 +725,10 @@ def _propagate(
     dep_face: NDArray[np.int64],
 ) -> None:  # pragma: no cover - compiled
     """Attach slots (row, slot) until none more can be: a slot attaches along a flow
-    it has once no slot it may reach across that flow's exit faces is waiting."""
+    it has once no slot it may reach across that flow's exit faces is waiting
+    (``remaining[f, row, slot]``: how many across face ``f`` still are), and
+    none of those faces is ``never`` crossed. The slots attached are the least
+    fixed point, whatever the order."""
     m, n_slots = slot_done.shape
     n_flows = faces.shape[0]
     queue = np.empty(m * n_slots, dtype=np.int64)
@@ -710,7 +738,9 @@ def _propagate(
             if slot_done[r, c]:
                 continue
             for d in range(n_flows):
-                if waiting[d, r, c] == 0 and (bits[r, c] >> np.uint64(d)) & np.uint64(1):
+                if (bits[r, c] >> np.uint64(d)) & np.uint64(1) and _ready(
+                    d, r, c, faces, remaining, never
+                ):
                     slot_done[r, c] = True
                     queue[tail] = r * n_slots + c
                     tail += 1
@@ -723,12 +753,15 @@ def _propagate(
             r, c, f = dep_row[j], dep_slot[j], dep_face[j]
             if slot_done[r, c]:
                 continue
-            bit = np.uint8(1 << f)
+            remaining[f, r, c] -= 1
+            if remaining[f, r, c] != 0:
+                continue
             for d in range(n_flows):
-                if (faces[d, r] & bit) == 0:
-                    continue
-                waiting[d, r, c] -= 1
-                if waiting[d, r, c] == 0 and (bits[r, c] >> np.uint64(d)) & np.uint64(1):
+                if (
+                    (faces[d, r] >> f) & 1
+                    and (bits[r, c] >> np.uint64(d)) & np.uint64(1)
+                    and _ready(d, r, c, faces, remaining, never)
+                ):
                     slot_done[r, c] = True
                     queue[tail] = r * n_slots + c
                     tail += 1
@@ -826,29 +859,6 @@ def _dependencies(
     return per_face, never, dep_ptr, dep_row, dep_slot, dep_face
 
 
-@njit(cache=True, nogil=True)
-def _waiting(
-    per_face: NDArray[np.int64], never: NDArray[np.bool_], faces: NDArray[np.uint8]
-) -> NDArray[np.int64]:  # pragma: no cover - compiled
-    """(flows, m, slots): how many slots across its exit faces each slot waits on
-    along each flow; a flow that may cross a face never crossed never attaches."""
-    n_faces, m, slots = per_face.shape
-    n_flows = faces.shape[0]
-    waiting = np.zeros((n_flows, m, slots), dtype=np.int64)
-    for d in range(n_flows):
-        for r in range(m):
-            stop = False
-            for f in range(n_faces):
-                if (faces[d, r] >> f) & 1:
-                    stop |= never[f, r]
-                    for c in range(slots):
-                        waiting[d, r, c] += per_face[f, r, c]
-            if stop:
-                for c in range(slots):
-                    waiting[d, r, c] = _NEVER
-    return waiting
-
-
 def slot_spans(
     table: SheetTable, nodes: NDArray[np.intp], limits: tuple[Any, ...]
 ) -> NDArray[np.float64]:
@@ -916,13 +926,16 @@ def attached_nodes(
     node_row = np.full((n, n_post), -1, dtype=np.int64)
     node_row[leaf, post] = np.arange(m)
     slot_done = np.ascontiguousarray(~exists | done[leaf, post][:, None])
-    face_ptr = np.zeros(n_faces + 1, dtype=np.int64)
-    face_ptr[1:] = np.cumsum([neighbours.pairs[f].shape[0] for f in range(n_faces)])
-    all_pairs = (
-        np.concatenate([neighbours.pairs[f].reshape(-1, 2) for f in range(n_faces)])
-        if n_faces
-        else np.zeros((0, 2), dtype=np.int64)
-    )
+    if neighbours.flat is not None:
+        all_pairs, face_ptr = neighbours.flat
+    else:
+        face_ptr = np.zeros(n_faces + 1, dtype=np.int64)
+        face_ptr[1:] = np.cumsum([neighbours.pairs[f].shape[0] for f in range(n_faces)])
+        all_pairs = (
+            np.concatenate([neighbours.pairs[f].reshape(-1, 2) for f in range(n_faces)])
+            if n_faces
+            else np.zeros((0, 2), dtype=np.int64)
+        )
     if spans is None:
         spans = np.zeros((m, slots, 0, 2))
     per_face, never, dep_ptr, dep_row, dep_slot, dep_face = _dependencies(
@@ -934,11 +947,11 @@ def attached_nodes(
         np.ascontiguousarray(spans, dtype=np.float64),
         np.ascontiguousarray(neighbours.open[leaf]),
     )
-    waiting = _waiting(per_face, never, np.ascontiguousarray(faces))
     _propagate(
         slot_done,
         np.ascontiguousarray(bits),
-        waiting,
+        per_face,
+        never,
         np.ascontiguousarray(faces),
         dep_ptr,
         dep_row,
