@@ -239,23 +239,34 @@ def _dot(values: list[Interval], velocity: list[Interval]) -> Interval:
 
 class _Field:
     """A flow over boxes: its velocity, the faces it may leave through, and the leg
-    it turns rigidly (with that leg's joint rate), if any."""
+    it turns rigidly (with that leg's joint rate), if any. A constant direction
+    keeps its ``vector`` alone: its velocity over the boxes is made when asked
+    for (the fields of many boxes then hold no arrays of velocities)."""
 
     def __init__(
         self,
-        velocity: list[Interval],
+        velocity: list[Interval] | None,
         faces: NDArray[np.uint8],
         vector: NDArray[np.float64] | None = None,
         leg: int = -1,
         turn: float = 0.0,
         usable: NDArray[np.bool_] | None = None,
     ) -> None:
-        self.velocity = velocity
+        self._velocity = velocity
         self.faces = faces
         self.vector = vector
         self.leg = leg
         self.turn = turn
         self.usable = usable
+
+    @property
+    def velocity(self) -> list[Interval]:
+        """One enclosure per pose axis over the boxes."""
+        if self._velocity is not None:
+            return self._velocity
+        assert self.vector is not None
+        n = self.faces.shape[0]
+        return [Interval(np.full(n, v)) for v in self.vector]
 
 
 def _fields(
@@ -273,8 +284,7 @@ def _fields(
     out = []
     for vector, fl in zip(vectors, faces, strict=True):
         mask = np.full(n, sum(1 << f for f in fl), dtype=np.uint8)
-        velocity = [Interval(np.full(n, v)) for v in vector]
-        out.append(_Field(velocity, mask, vector=vector))
+        out.append(_Field(None, mask, vector=vector))
     if k not in (2, 3):
         return out
     for i, leg in enumerate(mechanism.legs):
@@ -418,6 +428,7 @@ def _posture_flows(
     with quiet():
         margins = mechanism.constraint_margins(blo, bhi, angles, p, regular)
     for ff, field in enumerate(fields):
+        velocity = field.velocity
         with quiet():
             ok = usable.copy() if field.usable is None else usable & field.usable
             rising, falling, rates = [], [], []
@@ -432,11 +443,11 @@ def _posture_flows(
                     keeps = leg.turn_keeps(blo, bhi, int(branches[i]), field.turn)  # type: ignore[attr-defined]
                     ok &= regular[:, i] | keeps
                     continue
-                rate = _dot(gradients[i], field.velocity)
+                rate = _dot(gradients[i], velocity)
                 if folding[:, i].any():
                     if hasattr(leg, "fold_flow"):
                         keeps, fold_rate = leg.fold_flow(
-                            blo, bhi, leg_status[:, i], int(branches[i]), field.velocity,
+                            blo, bhi, leg_status[:, i], int(branches[i]), velocity,
                             cache=fold_cache[i],
                         )
                     else:
@@ -453,7 +464,7 @@ def _posture_flows(
                 rising.append(up)
                 falling.append(down)
             # passive limits, obstacles, collisions that may be active stay kept
-            kept = _kept(mechanism, margins, blo, bhi, angles, field.velocity, rates)
+            kept = _kept(mechanism, margins, blo, bhi, angles, velocity, rates)
         slot_oks = []
         for c in range(slots):
             slot_ok = ok.copy()
@@ -469,7 +480,7 @@ def _posture_flows(
         )
         with quiet():
             det_rate = _det_rate_where(
-                mechanism, blo, bhi, angles, field.velocity, rates, known, need
+                mechanism, blo, bhi, angles, velocity, rates, known, need
             )
         for c, slot_ok in enumerate(slot_oks):
             for row, s in enumerate((1, -1)):
@@ -597,6 +608,7 @@ def _adapted_flows(
             det_at.append(rate.mid)
         det_normal = np.stack(det_at, axis=1)
         joint_normal = [np.stack([g.mid for g in joint_at[i]], axis=1) for i in range(n_legs)]
+        del known_at, joint_at, det_at  # only the normals are needed below
         beyond = _constraint_normals(mechanism, margins, lo, hi, angles, gradients)
 
     def unit(v: Array) -> Array:
