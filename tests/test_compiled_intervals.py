@@ -117,3 +117,28 @@ def test_compiled_determinant_broadcasts_numbers() -> None:
     rng = np.random.default_rng(7)
     rows = [[sample(rng, 9) if (r + c) % 2 else Interval(2.5) for c in range(3)] for r in range(3)]
     assert same(base.interval_det(rows), base._interval_det(rows))
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4])
+def test_det_a_rate_at_some_boxes_matches_all(k: int) -> None:
+    """``at`` gives, at those boxes, the bounds of the whole (the compiled gather
+    for k <= 3, the subset of the Interval formula for 4); numbers broadcast."""
+    rng = np.random.default_rng(40 + k)
+    n = 3000
+    rows = [[sample(rng, n) if c else Interval(1.5) for c in range(k)] for _ in range(k)]
+    partials = [
+        ([[sample(rng, n) for _ in range(k)] for _ in range(k)], [sample(rng, n) for _ in range(k)])
+        for _ in range(k)
+    ]
+    velocity = [sample(rng, n) for _ in range(k)]
+    rates = [Interval(0.5)] + [sample(rng, n) for _ in range(k - 1)]
+    box = np.zeros((n, k))
+    legs = _Legs(k)
+    whole = legs.det_a_rate(box, box, [], velocity, rates, rows_and_partials=(rows, partials))
+    assert whole is not None
+    for at in (np.flatnonzero(rng.random(n) < 0.3), np.arange(n), np.zeros(0, dtype=np.int64)):
+        got = legs.det_a_rate(
+            box, box, [], velocity, rates, rows_and_partials=(rows, partials), at=at
+        )
+        assert got is not None
+        assert same(got, Interval(whole.lo[at], whole.hi[at]))

@@ -80,9 +80,17 @@ class FaceNeighbours:
     that face lies on the edge of the pose box.
     """
 
-    def __init__(self, pairs: list[NDArray[np.int64]], open_faces: NDArray[np.bool_]) -> None:
+    def __init__(
+        self,
+        pairs: list[NDArray[np.int64]],
+        open_faces: NDArray[np.bool_],
+        flat: tuple[NDArray[np.int64], NDArray[np.int64]] | None = None,
+    ) -> None:
         self.pairs = pairs
         self.open = open_faces
+        #: all the pairs, direction by direction, and where each direction's start
+        #: (``pairs[d]`` is ``flat[0][flat[1][d]:flat[1][d + 1]]``), when known
+        self.flat = flat
 
 
 def face_neighbours(tree: HyperTree, pairs: NDArray[np.intp] | None = None) -> FaceNeighbours:
@@ -114,20 +122,61 @@ def face_neighbours(tree: HyperTree, pairs: NDArray[np.intp] | None = None) -> F
         if not periodic[axis]:
             open_faces[:, 2 * axis] = ends[:, axis] == extent[axis]
             open_faces[:, 2 * axis + 1] = anchors[:, axis] == 0
-    both = np.concatenate([pairs, pairs[:, ::-1]]) if pairs.size else pairs.reshape(0, 2)
-    a, b = both[:, 0], both[:, 1]
-    out: list[NDArray[np.int64]] = []
-    for axis in range(k):
-        end_a = ends[a, axis]
-        end_b = ends[b, axis]
-        if periodic[axis]:
-            end_a = end_a % extent[axis]
-            end_b = end_b % extent[axis]
-        plus = end_a == anchors[b, axis]
-        minus = anchors[a, axis] == end_b
-        out.append(both[plus].astype(np.int64))
-        out.append(both[minus].astype(np.int64))
-    return FaceNeighbours(out, open_faces)
+    flat, ptr = _face_sides(
+        np.ascontiguousarray(pairs.reshape(-1, 2), dtype=np.int64),
+        np.ascontiguousarray(anchors, dtype=np.int64),
+        np.ascontiguousarray(ends, dtype=np.int64),
+        extent,
+        periodic,
+    )
+    out = [flat[ptr[d] : ptr[d + 1]] for d in range(2 * k)]
+    return FaceNeighbours(out, open_faces, (flat, ptr))
+
+
+@njit(cache=True, nogil=True)
+def _face_sides(
+    pairs: NDArray[np.int64],
+    anchors: NDArray[np.int64],
+    ends: NDArray[np.int64],
+    extent: NDArray[np.int64],
+    periodic: NDArray[np.bool_],
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
+    """The face-adjacent pairs ``(a, b)`` (each pair both ways: all of them as
+    given, then all reversed) by the side of ``a`` that ``b`` lies across:
+    ``(flat, ptr)``, direction ``d``'s pairs being ``flat[ptr[d]:ptr[d + 1]]``,
+    in that order."""
+    m = pairs.shape[0]
+    k = anchors.shape[1]
+    count = np.zeros(2 * k, dtype=np.int64)
+    ptr = np.zeros(2 * k + 1, dtype=np.int64)
+    flat = np.empty((0, 2), dtype=np.int64)
+    for step in range(2):
+        if step == 1:
+            for d in range(2 * k):
+                ptr[d + 1] = ptr[d] + count[d]
+            flat = np.empty((ptr[2 * k], 2), dtype=np.int64)
+            count[:] = 0
+        for half in range(2):
+            for e in range(m):
+                a = pairs[e, half]
+                b = pairs[e, 1 - half]
+                for axis in range(k):
+                    end_a = ends[a, axis]
+                    end_b = ends[b, axis]
+                    if periodic[axis]:
+                        end_a = end_a % extent[axis]
+                        end_b = end_b % extent[axis]
+                    for d in (2 * axis, 2 * axis + 1):
+                        # +e_axis: b starts where a ends; -e_axis: a starts where b ends
+                        plus = end_a == anchors[b, axis]
+                        minus = anchors[a, axis] == end_b
+                        if not (plus if d == 2 * axis else minus):
+                            continue
+                        if step == 1:
+                            flat[ptr[d] + count[d], 0] = a
+                            flat[ptr[d] + count[d], 1] = b
+                        count[d] += 1
+    return flat, ptr
 
 
 def supports_flows(mechanism: Mechanism) -> bool:
@@ -190,23 +239,34 @@ def _dot(values: list[Interval], velocity: list[Interval]) -> Interval:
 
 class _Field:
     """A flow over boxes: its velocity, the faces it may leave through, and the leg
-    it turns rigidly (with that leg's joint rate), if any."""
+    it turns rigidly (with that leg's joint rate), if any. A constant direction
+    keeps its ``vector`` alone: its velocity over the boxes is made when asked
+    for (the fields of many boxes then hold no arrays of velocities)."""
 
     def __init__(
         self,
-        velocity: list[Interval],
+        velocity: list[Interval] | None,
         faces: NDArray[np.uint8],
         vector: NDArray[np.float64] | None = None,
         leg: int = -1,
         turn: float = 0.0,
         usable: NDArray[np.bool_] | None = None,
     ) -> None:
-        self.velocity = velocity
+        self._velocity = velocity
         self.faces = faces
         self.vector = vector
         self.leg = leg
         self.turn = turn
         self.usable = usable
+
+    @property
+    def velocity(self) -> list[Interval]:
+        """One enclosure per pose axis over the boxes."""
+        if self._velocity is not None:
+            return self._velocity
+        assert self.vector is not None
+        n = self.faces.shape[0]
+        return [Interval(np.full(n, v)) for v in self.vector]
 
 
 def _fields(
@@ -224,8 +284,7 @@ def _fields(
     out = []
     for vector, fl in zip(vectors, faces, strict=True):
         mask = np.full(n, sum(1 << f for f in fl), dtype=np.uint8)
-        velocity = [Interval(np.full(n, v)) for v in vector]
-        out.append(_Field(velocity, mask, vector=vector))
+        out.append(_Field(None, mask, vector=vector))
     if k not in (2, 3):
         return out
     for i, leg in enumerate(mechanism.legs):
@@ -369,6 +428,7 @@ def _posture_flows(
     with quiet():
         margins = mechanism.constraint_margins(blo, bhi, angles, p, regular)
     for ff, field in enumerate(fields):
+        velocity = field.velocity
         with quiet():
             ok = usable.copy() if field.usable is None else usable & field.usable
             rising, falling, rates = [], [], []
@@ -383,11 +443,11 @@ def _posture_flows(
                     keeps = leg.turn_keeps(blo, bhi, int(branches[i]), field.turn)  # type: ignore[attr-defined]
                     ok &= regular[:, i] | keeps
                     continue
-                rate = _dot(gradients[i], field.velocity)
+                rate = _dot(gradients[i], velocity)
                 if folding[:, i].any():
                     if hasattr(leg, "fold_flow"):
                         keeps, fold_rate = leg.fold_flow(
-                            blo, bhi, leg_status[:, i], int(branches[i]), field.velocity,
+                            blo, bhi, leg_status[:, i], int(branches[i]), velocity,
                             cache=fold_cache[i],
                         )
                     else:
@@ -403,17 +463,26 @@ def _posture_flows(
                 rates.append(rate)
                 rising.append(up)
                 falling.append(down)
-            det_rate = mechanism.det_a_rate(
-                blo, bhi, angles, field.velocity, rates, rows_and_partials=known
-            )
             # passive limits, obstacles, collisions that may be active stay kept
-            kept = _kept(mechanism, margins, blo, bhi, angles, field.velocity, rates)
+            kept = _kept(mechanism, margins, blo, bhi, angles, velocity, rates)
+        slot_oks = []
         for c in range(slots):
             slot_ok = ok.copy()
             for i in range(n_legs):
                 _, lower, upper = pieces[i]
                 j = combos[c][i]
                 slot_ok &= (~lower[j] | rising[i]) & (~upper[j] | falling[i])
+            slot_oks.append(slot_ok)
+        # the rate of det A decides a flow only where a slot and a sign may flow
+        # otherwise: elsewhere it is left out (NaN), which changes no flow
+        need = np.logical_or.reduce(slot_oks) & (
+            (kept[0] & (sign != 1)) | (kept[1] & (sign != -1))
+        )
+        with quiet():
+            det_rate = _det_rate_where(
+                mechanism, blo, bhi, angles, velocity, rates, known, need
+            )
+        for c, slot_ok in enumerate(slot_oks):
             for row, s in enumerate((1, -1)):
                 steady = sign == s
                 if det_rate is not None:
@@ -450,6 +519,35 @@ def _kept(
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         moving = mechanism.linkage_velocities(lo, hi, angles, velocity, rates)
         return margins.kept(moving, 1), margins.kept(moving, -1)
+
+
+def _det_rate_where(
+    mechanism: Mechanism,
+    lo: Array,
+    hi: Array,
+    angles: list[Interval],
+    velocity: list[Interval],
+    rates: list[Interval],
+    known: Any,
+    need: Any,
+) -> Interval | None:
+    """:meth:`~moveability.mechanisms.base.Mechanism.det_a_rate` over the boxes
+    where ``need`` holds, NaN elsewhere (no comparison holds there): the same
+    bounds where it is computed, every operation being one box's own."""
+    n = lo.shape[0]
+    need = np.broadcast_to(np.asarray(need, dtype=bool), (n,))
+    if need.all():
+        return mechanism.det_a_rate(lo, hi, angles, velocity, rates, rows_and_partials=known)
+    if known is None:
+        return None
+    at = np.flatnonzero(need)
+    out_lo, out_hi = np.full(n, np.nan), np.full(n, np.nan)
+    if at.size:
+        sub = mechanism.det_a_rate(lo, hi, angles, velocity, rates, rows_and_partials=known, at=at)
+        if sub is None:
+            return None
+        out_lo[at], out_hi[at] = sub.lo, sub.hi
+    return Interval(out_lo, out_hi)
 
 
 def _widened(x: Interval) -> Interval:
@@ -497,16 +595,20 @@ def _adapted_flows(
             for i, leg in enumerate(mechanism.legs)
         ]
         det_at = []
+        # the rows and their partials at the centres, shared by the axes
+        known_at = mechanism.rows_and_partials(mid, mid, centre_angles)
         for axis in range(k):
             along = [Interval(np.full(n, float(axis == j))) for j in range(k)]
             rate = mechanism.det_a_rate(
-                mid, mid, centre_angles, along, [joint_at[i][axis] for i in range(n_legs)]
-            )
+                mid, mid, centre_angles, along, [joint_at[i][axis] for i in range(n_legs)],
+                rows_and_partials=known_at,
+            )  # fmt: skip
             if rate is None:
                 return
             det_at.append(rate.mid)
         det_normal = np.stack(det_at, axis=1)
         joint_normal = [np.stack([g.mid for g in joint_at[i]], axis=1) for i in range(n_legs)]
+        del known_at, joint_at, det_at  # only the normals are needed below
         beyond = {
             s: _constraint_normals(mechanism, margins, lo, hi, angles, gradients, s)
             for s in (1, -1)
@@ -540,18 +642,20 @@ def _adapted_flows(
             velocity = [Interval(direction[:, axis]) for axis in range(k)]
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 rates = [_dot(gradients[i], velocity) for i in range(n_legs)]
-                det_rate = mechanism.det_a_rate(
-                    lo, hi, angles, velocity, rates, rows_and_partials=known
-                )
             ok = moving.copy()
             for i in range(n_legs):
                 _, lower, upper = pieces[i]
                 j = combos[c][i]
                 ok &= (~lower[j] | (rates[i].lo >= 0)) & (~upper[j] | (rates[i].hi <= 0))
+            kept = _kept(mechanism, margins, lo, hi, angles, velocity, rates)[row]
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                # the rate decides the flow only where the rest allows it (see _posture_flows)
+                det_rate = _det_rate_where(
+                    mechanism, lo, hi, angles, velocity, rates, known, ok & kept & (sign != s)
+                )
             steady = sign == s
             if det_rate is not None:
                 steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
-            kept = _kept(mechanism, margins, lo, hi, angles, velocity, rates)[row]
             index = first + 2 * c + row
             flows[row, :, c, index] = ok & steady & kept
             columns = [direction[:, axis] for axis in range(k)]
@@ -607,11 +711,30 @@ def into_corner(normals: Array) -> Array:
     return np.where((good & np.isfinite(dual).all(axis=1))[:, None], dual, total)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _ready(
+    d: int,
+    r: int,
+    c: int,
+    faces: NDArray[np.uint8],
+    remaining: NDArray[np.int64],
+    never: NDArray[np.bool_],
+) -> bool:  # pragma: no cover - compiled
+    """Whether slot ``(r, c)`` waits on nothing across the exit faces of flow ``d``
+    (and none of them is a face never crossed)."""
+    mask = faces[d, r]
+    for f in range(remaining.shape[0]):
+        if (mask >> f) & 1 and (never[f, r] or remaining[f, r, c] != 0):
+            return False
+    return True
+
+
 @njit(cache=True, nogil=True)
 def _propagate(
     slot_done: NDArray[np.bool_],
     bits: NDArray[np.uint64],
-    waiting: NDArray[np.int64],
+    remaining: NDArray[np.int64],
+    never: NDArray[np.bool_],
     faces: NDArray[np.uint8],
     dep_ptr: NDArray[np.int64],
     dep_row: NDArray[np.int64],
@@ -619,7 +742,10 @@ def _propagate(
     dep_face: NDArray[np.int64],
 ) -> None:  # pragma: no cover - compiled
     """Attach slots (row, slot) until none more can be: a slot attaches along a flow
-    it has once no slot it may reach across that flow's exit faces is waiting."""
+    it has once no slot it may reach across that flow's exit faces is waiting
+    (``remaining[f, row, slot]``: how many across face ``f`` still are), and
+    none of those faces is ``never`` crossed. The slots attached are the least
+    fixed point, whatever the order."""
     m, n_slots = slot_done.shape
     n_flows = faces.shape[0]
     queue = np.empty(m * n_slots, dtype=np.int64)
@@ -629,7 +755,9 @@ def _propagate(
             if slot_done[r, c]:
                 continue
             for d in range(n_flows):
-                if waiting[d, r, c] == 0 and (bits[r, c] >> np.uint64(d)) & np.uint64(1):
+                if (bits[r, c] >> np.uint64(d)) & np.uint64(1) and _ready(
+                    d, r, c, faces, remaining, never
+                ):
                     slot_done[r, c] = True
                     queue[tail] = r * n_slots + c
                     tail += 1
@@ -642,16 +770,110 @@ def _propagate(
             r, c, f = dep_row[j], dep_slot[j], dep_face[j]
             if slot_done[r, c]:
                 continue
-            bit = np.uint8(1 << f)
+            remaining[f, r, c] -= 1
+            if remaining[f, r, c] != 0:
+                continue
             for d in range(n_flows):
-                if (faces[d, r] & bit) == 0:
-                    continue
-                waiting[d, r, c] -= 1
-                if waiting[d, r, c] == 0 and (bits[r, c] >> np.uint64(d)) & np.uint64(1):
+                if (
+                    (faces[d, r] >> f) & 1
+                    and (bits[r, c] >> np.uint64(d)) & np.uint64(1)
+                    and _ready(d, r, c, faces, remaining, never)
+                ):
                     slot_done[r, c] = True
                     queue[tail] = r * n_slots + c
                     tail += 1
                     break
+
+
+@njit(cache=True, nogil=True)
+def _dependencies(
+    pairs: NDArray[np.int64],
+    face_ptr: NDArray[np.int64],
+    node_row: NDArray[np.int64],
+    done: NDArray[np.bool_],
+    slot_done: NDArray[np.bool_],
+    spans: NDArray[np.float64],
+    open_faces: NDArray[np.bool_],
+) -> tuple[
+    NDArray[np.int64],
+    NDArray[np.bool_],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+]:  # pragma: no cover - compiled
+    """What each waiting slot waits on, for :func:`attached_nodes`.
+
+    ``pairs[face_ptr[f]:face_ptr[f + 1]]`` are the leaves ``(a, b)`` with ``b``
+    across ``a``'s face ``f``; ``node_row`` the row of each node (-1: none),
+    ``open_faces`` (m, faces) those of each row's leaf on the edge of the box.
+    Returns ``per_face`` (faces, m, slots): the slots across face ``f`` a slot
+    may land in that are waiting; ``never`` (faces, m): faces that can never be
+    crossed (the box's edge, or a node across neither done nor listed); and
+    the triples (row, slot, face) waiting on each slot ``sub = row * slots +
+    slot`` across, as ``dep_*[dep_ptr[sub]:dep_ptr[sub + 1]]`` (by face, pair,
+    posture, own slot, then slot across)."""
+    m, slots = slot_done.shape
+    n_post = done.shape[1]
+    n_faces = face_ptr.size - 1
+    n_legs = spans.shape[2]
+    per_face = np.zeros((n_faces, m, slots), dtype=np.int64)
+    never = np.zeros((n_faces, m), dtype=np.bool_)
+    dep_ptr = np.zeros(m * slots + 1, dtype=np.int64)
+    fill = np.zeros(m * slots, dtype=np.int64)
+    dep_row = np.empty(0, dtype=np.int64)
+    dep_slot = np.empty(0, dtype=np.int64)
+    dep_face = np.empty(0, dtype=np.int64)
+    for step in range(2):
+        if step == 1:
+            for sub in range(m * slots):
+                dep_ptr[sub + 1] = dep_ptr[sub] + fill[sub]
+                fill[sub] = 0
+            total = dep_ptr[m * slots]
+            dep_row = np.empty(total, dtype=np.int64)
+            dep_slot = np.empty(total, dtype=np.int64)
+            dep_face = np.empty(total, dtype=np.int64)
+        for f in range(n_faces):
+            for e in range(face_ptr[f], face_ptr[f + 1]):
+                a, b = pairs[e, 0], pairs[e, 1]
+                for p in range(n_post):
+                    ra, rb = node_row[a, p], node_row[b, p]
+                    if ra < 0 or done[b, p]:
+                        continue
+                    if rb < 0:
+                        # a node across that is neither done nor listed never attaches
+                        never[f, ra] = True
+                        continue
+                    for ca in range(slots):
+                        if slot_done[ra, ca]:
+                            continue
+                        for cb in range(slots):
+                            if slot_done[rb, cb]:
+                                continue
+                            # their joint ranges meet
+                            meet = True
+                            for j in range(n_legs):
+                                if not (
+                                    spans[ra, ca, j, 0] <= spans[rb, cb, j, 1] + _SPAN_TOL
+                                    and spans[rb, cb, j, 0] <= spans[ra, ca, j, 1] + _SPAN_TOL
+                                ):
+                                    meet = False
+                            if not meet:
+                                continue
+                            sub = rb * slots + cb
+                            if step == 0:
+                                per_face[f, ra, ca] += 1
+                            else:
+                                at = dep_ptr[sub] + fill[sub]
+                                dep_row[at] = ra
+                                dep_slot[at] = ca
+                                dep_face[at] = f
+                            fill[sub] += 1
+    for f in range(n_faces):
+        for r in range(m):
+            # a face on the edge of the box can never be crossed
+            never[f, r] |= open_faces[r, f]
+    return per_face, never, dep_ptr, dep_row, dep_slot, dep_face
 
 
 def slot_spans(
@@ -720,64 +942,38 @@ def attached_nodes(
     leaf, post = nodes[:, 0].astype(np.int64), nodes[:, 1].astype(np.int64)
     node_row = np.full((n, n_post), -1, dtype=np.int64)
     node_row[leaf, post] = np.arange(m)
-    slot_done = ~exists | done[leaf, post][:, None]
-    per_face = np.zeros((n_faces, m, slots), dtype=np.int64)
-    never = np.zeros((n_faces, m), dtype=bool)
-    dep_sub, dep_row, dep_slot, dep_face = [], [], [], []
-    for f in range(n_faces):
-        pairs = neighbours.pairs[f]
-        a = np.repeat(pairs[:, 0].astype(np.int64), n_post)
-        b = np.repeat(pairs[:, 1].astype(np.int64), n_post)
-        p = np.tile(np.arange(n_post, dtype=np.int64), pairs.shape[0])
-        ra, rb = node_row[a, p], node_row[b, p]
-        live = (ra >= 0) & ~done[b, p]
-        # a node across that is neither done nor listed never attaches
-        never[f, ra[live & (rb < 0)]] = True
-        live &= rb >= 0
-        ra, rb = ra[live], rb[live]
-        # (pair, own slot, slot across): both waiting, and their joint ranges meet
-        meet = ~slot_done[ra][:, :, None] & ~slot_done[rb][:, None, :]
-        if spans is not None and spans.shape[2]:
-            sa, sb = spans[ra][:, :, None], spans[rb][:, None, :]
-            meet &= (
-                (sa[..., 0] <= sb[..., 1] + _SPAN_TOL) & (sb[..., 0] <= sa[..., 1] + _SPAN_TOL)
-            ).all(axis=3)
-        e, ca, cb = np.nonzero(meet)
-        per_face[f] += np.bincount(ra[e] * slots + ca, minlength=m * slots).reshape(m, slots)
-        dep_sub.append(rb[e] * slots + cb)
-        dep_row.append(ra[e])
-        dep_slot.append(ca.astype(np.int64))
-        dep_face.append(np.full(e.size, f, dtype=np.int64))
-        # a face on the edge of the box can never be crossed
-        never[f] |= neighbours.open[leaf, f]
-    waiting = np.zeros((faces.shape[0], m, slots), dtype=np.int64)
-    for d in range(faces.shape[0]):
-        stop = np.zeros(m, dtype=bool)
-        for f in range(n_faces):
-            crosses = (faces[d] >> f) & 1 == 1
-            waiting[d] += np.where(crosses[:, None], per_face[f], 0)
-            stop |= crosses & never[f]
-        # a flow that may cross such a face never attaches anything
-        waiting[d][stop] = np.iinfo(np.int64).max // 2
-    sub = np.concatenate(dep_sub) if dep_sub else np.zeros(0, dtype=np.int64)
-    order = np.argsort(sub, kind="stable")
-    dep_ptr = np.zeros(m * slots + 1, dtype=np.int64)
-    dep_ptr[1:] = np.cumsum(np.bincount(sub, minlength=m * slots))
-
-    def flat(parts: list[NDArray[np.int64]]) -> NDArray[np.int64]:
-        out = np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
-        return np.ascontiguousarray(out[order].astype(np.int64))
-
-    slot_done = np.ascontiguousarray(slot_done)
+    slot_done = np.ascontiguousarray(~exists | done[leaf, post][:, None])
+    if neighbours.flat is not None:
+        all_pairs, face_ptr = neighbours.flat
+    else:
+        face_ptr = np.zeros(n_faces + 1, dtype=np.int64)
+        face_ptr[1:] = np.cumsum([neighbours.pairs[f].shape[0] for f in range(n_faces)])
+        all_pairs = (
+            np.concatenate([neighbours.pairs[f].reshape(-1, 2) for f in range(n_faces)])
+            if n_faces
+            else np.zeros((0, 2), dtype=np.int64)
+        )
+    if spans is None:
+        spans = np.zeros((m, slots, 0, 2))
+    per_face, never, dep_ptr, dep_row, dep_slot, dep_face = _dependencies(
+        np.ascontiguousarray(all_pairs, dtype=np.int64),
+        face_ptr,
+        node_row,
+        np.ascontiguousarray(done),
+        slot_done,
+        np.ascontiguousarray(spans, dtype=np.float64),
+        np.ascontiguousarray(neighbours.open[leaf]),
+    )
     _propagate(
         slot_done,
         np.ascontiguousarray(bits),
-        waiting,
+        per_face,
+        never,
         np.ascontiguousarray(faces),
         dep_ptr,
-        flat(dep_row),
-        flat(dep_slot),
-        flat(dep_face),
+        dep_row,
+        dep_slot,
+        dep_face,
     )
     state = done.copy()
     state[leaf, post] |= slot_done.all(axis=1)

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from ..hypertree.status import BOUNDARY, IN, OUT
 from ..intervals import Interval
-from ..limits import INSIDE, OUTSIDE, STRADDLES
+from ..limits import INSIDE, OUTSIDE
 from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
 from ..types import Array
 
@@ -174,18 +174,17 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
             code = np.where(regular, branch_limits[i][b], hull_limits[i])
             lim_in &= code == INSIDE
             lim_out |= code == OUTSIDE
-        # passive limits, obstacles, collisions: part of what a valid configuration is
+        # passive limits, obstacles, collisions: part of what a valid configuration
+        # is; and a sign of det A whose every configuration violates one
         with np.errstate(invalid="ignore"):
-            beyond = mechanism.constraint_codes(lo, hi, angles, p, leg_status == REGULAR)
+            beyond, signs = mechanism.constraint_checks(
+                lo, hi, angles, p, leg_status == REGULAR
+            )
         if beyond is not None:
             lim_in &= beyond == INSIDE
             lim_out |= beyond == OUTSIDE
         with np.errstate(invalid="ignore"):
             det = mechanism.det_a_boxes(lo, hi, angles, posture=p)
-            # a sign of det A whose every configuration violates a constraint
-            signs = None
-            if beyond is not None and (beyond == STRADDLES).any():
-                signs = mechanism.constraint_signs(lo, hi, angles, p, leg_status == REGULAR)
         if signs is not None:
             no_plus, no_minus = signs
             lim_out |= no_plus & no_minus

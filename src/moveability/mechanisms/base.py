@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from .. import intervals as iv
 from ..errors import InvalidParameterError
 from ..intervals import Interval, add_into, mul_into, sub_into
-from ..limits import INSIDE, JointLimit
+from ..limits import INSIDE, STRADDLES, JointLimit
 from ..types import Array
 from .constraints import ConstraintMargins, Constraints, Linkage
 
@@ -174,10 +174,13 @@ def _interval_det(rows: list[list[Interval]]) -> Interval:
 _CHUNK = 2048
 
 
-def _compiled(items: list[Interval], kernel: Any) -> Interval:
+def _compiled(
+    items: list[Interval], kernel: Any, at: NDArray[np.int64] | None = None
+) -> Interval:
     """``kernel(lo, hi, out_lo, out_hi)`` over intervals broadcast together: their
     bounds as tuples of flat read-only arrays (views where they can be: no stacked
-    copy), the result's bounds written into ``out``."""
+    copy), the result's bounds written into ``out``. With ``at`` (flat indices),
+    ``kernel(lo, hi, at, out_lo, out_hi)`` and a result at those elements only."""
     shape = np.broadcast_shapes(*(x.lo.shape for x in items))
     m = int(np.prod(shape, dtype=np.int64))
 
@@ -190,6 +193,10 @@ def _compiled(items: list[Interval], kernel: Any) -> Interval:
 
     lo = tuple(flat(x.lo) for x in items)
     hi = tuple(flat(x.hi) for x in items)
+    if at is not None:
+        out_lo, out_hi = np.empty(at.size), np.empty(at.size)
+        kernel(lo, hi, np.ascontiguousarray(at, dtype=np.int64), out_lo, out_hi)
+        return Interval(out_lo, out_hi)
     out_lo, out_hi = np.empty(m), np.empty(m)
     kernel(lo, hi, out_lo, out_hi)
     return Interval(out_lo.reshape(shape), out_hi.reshape(shape))
@@ -262,10 +269,6 @@ def _det_rate_bounds(
     ``d row / dX`` (leg, entry, axis: k x k x k), ``d row / dq`` (leg, entry: k x
     k), the velocity (k) and the joint rates (k)."""
     k = 1 if len(lo) == 5 else (2 if len(lo) == 20 else 3)
-    at_x = k * k
-    at_q = at_x + k * k * k
-    at_v = at_q + k * k
-    at_r = at_v + k
     m = out_lo.size
     term_lo, term_hi = np.empty(_CHUNK), np.empty(_CHUNK)
     t_lo, t_hi = np.empty((2, _CHUNK)), np.empty((2, _CHUNK))
@@ -276,33 +279,91 @@ def _det_rate_bounds(
             term_lo, term_hi = np.empty(e - s), np.empty(e - s)
             t_lo, t_hi = np.empty((2, e - s)), np.empty((2, e - s))
             a_lo, a_hi = np.empty((k, k, e - s)), np.empty((k, k, e - s))
-        o_lo, o_hi = out_lo[s:e], out_hi[s:e]
-        for i in range(k):
-            # the matrix with row i differentiated
-            for r in range(k):
-                if r == i:
-                    continue
-                for c in range(k):
-                    a_lo[r, c] = lo[r * k + c][s:e]
-                    a_hi[r, c] = hi[r * k + c][s:e]
-            for j in range(k):
-                q = at_q + i * k + j
+        _det_rate_span(
+            lo, hi, s, e, k, out_lo[s:e], out_hi[s:e], term_lo, term_hi, t_lo, t_hi, a_lo, a_hi
+        )
+
+
+@njit(cache=True, nogil=True)
+def _det_rate_bounds_at(
+    lo: Any, hi: Any, at: NDArray[np.int64], out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """:func:`_det_rate_bounds` at the elements ``at`` of the flat arrays only
+    (``out`` has one element per index): each chunk's elements gathered, then
+    the same operations."""
+    n_items = len(lo)
+    k = 1 if n_items == 5 else (2 if n_items == 20 else 3)
+    m = out_lo.size
+    g_lo, g_hi = np.empty((n_items, _CHUNK)), np.empty((n_items, _CHUNK))
+    term_lo, term_hi = np.empty(_CHUNK), np.empty(_CHUNK)
+    t_lo, t_hi = np.empty((2, _CHUNK)), np.empty((2, _CHUNK))
+    a_lo, a_hi = np.empty((k, k, _CHUNK)), np.empty((k, k, _CHUNK))
+    for s in range(0, m, _CHUNK):
+        e = min(s + _CHUNK, m)
+        w = e - s
+        if w < _CHUNK:
+            g_lo, g_hi = np.empty((n_items, w)), np.empty((n_items, w))
+            term_lo, term_hi = np.empty(w), np.empty(w)
+            t_lo, t_hi = np.empty((2, w)), np.empty((2, w))
+            a_lo, a_hi = np.empty((k, k, w)), np.empty((k, k, w))
+        for item in range(n_items):
+            src_lo, src_hi = lo[item], hi[item]
+            for j in range(w):
+                g_lo[item, j] = src_lo[at[s + j]]
+                g_hi[item, j] = src_hi[at[s + j]]
+        _det_rate_span(
+            g_lo, g_hi, 0, w, k, out_lo[s:e], out_hi[s:e], term_lo, term_hi, t_lo, t_hi, a_lo, a_hi
+        )
+
+
+@njit(cache=True, nogil=True)
+def _det_rate_span(
+    lo: Any,
+    hi: Any,
+    s: int,
+    e: int,
+    k: int,
+    o_lo: Array,
+    o_hi: Array,
+    term_lo: Array,
+    term_hi: Array,
+    t_lo: Array,
+    t_hi: Array,
+    a_lo: Array,
+    a_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """One chunk of :func:`_det_rate_bounds`: elements ``s:e`` of the items
+    ``lo[i]``, ``hi[i]`` into ``o`` (``e - s`` elements; the scratch as wide)."""
+    at_x = k * k
+    at_q = at_x + k * k * k
+    at_v = at_q + k * k
+    at_r = at_v + k
+    for i in range(k):
+        # the matrix with row i differentiated
+        for r in range(k):
+            if r == i:
+                continue
+            for c in range(k):
+                a_lo[r, c] = lo[r * k + c][s:e]
+                a_hi[r, c] = hi[r * k + c][s:e]
+        for j in range(k):
+            q = at_q + i * k + j
+            mul_into(
+                lo[q][s:e], hi[q][s:e], lo[at_r + i][s:e], hi[at_r + i][s:e],
+                a_lo[i, j], a_hi[i, j],
+            )  # fmt: skip
+            for axis in range(k):
+                x = at_x + (i * k + j) * k + axis
                 mul_into(
-                    lo[q][s:e], hi[q][s:e], lo[at_r + i][s:e], hi[at_r + i][s:e],
-                    a_lo[i, j], a_hi[i, j],
+                    lo[x][s:e], hi[x][s:e], lo[at_v + axis][s:e], hi[at_v + axis][s:e],
+                    t_lo[0], t_hi[0],
                 )  # fmt: skip
-                for axis in range(k):
-                    x = at_x + (i * k + j) * k + axis
-                    mul_into(
-                        lo[x][s:e], hi[x][s:e], lo[at_v + axis][s:e], hi[at_v + axis][s:e],
-                        t_lo[0], t_hi[0],
-                    )  # fmt: skip
-                    add_into(a_lo[i, j], a_hi[i, j], t_lo[0], t_hi[0], a_lo[i, j], a_hi[i, j])
-            if i == 0:
-                _det_chunk(a_lo, a_hi, o_lo, o_hi, t_lo, t_hi)
-            else:
-                _det_chunk(a_lo, a_hi, term_lo, term_hi, t_lo, t_hi)
-                add_into(o_lo, o_hi, term_lo, term_hi, o_lo, o_hi)
+                add_into(a_lo[i, j], a_hi[i, j], t_lo[0], t_hi[0], a_lo[i, j], a_hi[i, j])
+        if i == 0:
+            _det_chunk(a_lo, a_hi, o_lo, o_hi, t_lo, t_hi)
+        else:
+            _det_chunk(a_lo, a_hi, term_lo, term_hi, t_lo, t_hi)
+            add_into(o_lo, o_hi, term_lo, term_hi, o_lo, o_hi)
 
 
 class Mechanism:
@@ -395,6 +456,53 @@ class Mechanism:
         if margins is None:
             return None
         return margins.excluded(1), margins.excluded(-1)
+
+    def constraint_checks(
+        self,
+        lo: Array,
+        hi: Array,
+        angles: list[Interval],
+        posture: int,
+        regular: NDArray[np.bool_],
+    ) -> tuple[NDArray[np.uint8] | None, tuple[NDArray[np.bool_], NDArray[np.bool_]] | None]:
+        """:meth:`constraint_codes`, and :meth:`constraint_signs` where some box
+        straddles the constraints (else None), as the sheets need them: the
+        constraints enclosed once (one :meth:`constraint_margins`) for both. A
+        mechanism with its own codes or signs (a custom one) gets its own
+        methods called.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from moveability.intervals import Interval
+        >>> from moveability.mechanisms import FiveBar
+        >>> m = FiveBar()  # the paper's: no constraint beyond the sheets
+        >>> box = np.array([[1.0, 5.0]])
+        >>> m.constraint_checks(box, box, [Interval([1.0]), Interval([2.0])], 0,
+        ...                     np.ones((1, 2), dtype=bool))
+        (None, None)
+        """
+        mine = type(self)
+        if (
+            mine.constraint_codes is not Mechanism.constraint_codes
+            or mine.constraint_signs is not Mechanism.constraint_signs
+        ):
+            codes = self.constraint_codes(lo, hi, angles, posture, regular)
+            if codes is None or not (codes == STRADDLES).any():
+                return codes, None
+            return codes, self.constraint_signs(lo, hi, angles, posture, regular)
+        margins = self.constraint_margins(lo, hi, angles, posture, regular)
+        if margins is None:
+            return None, None
+        codes = margins.codes
+        if (
+            not (codes == STRADDLES).any()
+            or self.restrictions.empty
+            or self.linkage is None
+            or not self.linkage.det_sides
+        ):
+            return codes, None
+        return codes, (margins.excluded(1), margins.excluded(-1))
 
     def constraint_margins(
         self,
@@ -530,6 +638,7 @@ class Mechanism:
         rows_and_partials: (
             tuple[list[list[Interval]], list[tuple[list[list[Interval]], list[Interval]]]] | None
         ) = None,
+        at: NDArray[np.intp] | None = None,
     ) -> Interval | None:
         """Enclosure of the rate of det A over boxes when the pose moves at
         ``velocity`` (one enclosure per pose axis) and each joint at its rate.
@@ -538,12 +647,38 @@ class Mechanism:
         ``d row = (d row / dX) velocity + (d row / dq) rate``. None when a leg
         gives no ``row_partials``. ``rows_and_partials`` may be given, as
         :meth:`rows_and_partials` returns them, to spare computing them again.
+        ``at`` (indices of boxes), when given, asks for the enclosures at those
+        boxes only (the same bounds: each box's operations are its own).
         """
         known = rows_and_partials or self.rows_and_partials(lo, hi, angles)
         if known is None:
             return None
         rows, partials = known
         k = len(velocity)
+        if at is not None:
+            at = np.asarray(at, dtype=np.int64)
+            if not (1 <= k <= 3 and len(self.legs) == k):
+                n = lo.shape[0]
+
+                def take(x: Interval) -> Interval:
+                    x = iv.as_interval(x)
+                    return x[at] if x.lo.ndim and x.lo.shape[0] == n else x
+
+                return self.det_a_rate(
+                    lo[at],
+                    hi[at],
+                    [take(a) for a in angles],
+                    [take(v) for v in velocity],
+                    [take(r) for r in joint_rates],
+                    rows_and_partials=(
+                        [[take(x) for x in row] for row in rows],
+                        [
+                            ([[take(x) for x in entry] for entry in along_x],
+                             [take(x) for x in along_q])
+                            for along_x, along_q in partials
+                        ],
+                    ),
+                )  # fmt: skip
         if 1 <= k <= 3 and len(self.legs) == k:
             # one compiled pass, the same operations in the same order as below
             items = [iv.as_interval(x) for row in rows for x in row]
@@ -553,6 +688,8 @@ class Mechanism:
             items += [iv.as_interval(x) for _, along_q in partials for x in along_q]
             items += [iv.as_interval(v) for v in velocity]
             items += [iv.as_interval(r) for r in joint_rates]
+            if at is not None:
+                return _compiled(items, _det_rate_bounds_at, at)
             return _compiled(items, _det_rate_bounds)
         total: Interval | None = None
         for i in range(len(self.legs)):

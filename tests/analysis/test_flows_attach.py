@@ -1,0 +1,110 @@
+"""The compiled attachment of :func:`moveability.analysis.flows.attached_nodes` and the
+face sides of :func:`~moveability.analysis.flows.face_neighbours`, against plain
+Python references on random small trees (merged cells of several sizes, a
+periodic axis or not)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from moveability import HyperTree
+from moveability.analysis.flows import _SPAN_TOL, attached_nodes, face_neighbours
+from moveability.hypertree.status import BOUNDARY, IN, OUT
+from moveability.hypertree.topology import adjacency
+
+
+def random_tree(rng: np.random.Generator, periodic: tuple[int, ...]) -> HyperTree:
+    statuses = np.array([IN, BOUNDARY, OUT], dtype=np.uint8)
+    values = rng.choice(statuses, size=(8, 8), p=[0.5, 0.3, 0.2])
+    values[:4, :4] = IN  # a merged block: leaves of several sizes
+    return HyperTree.from_array(values, periodic=periodic)
+
+
+def reference_sides(tree: HyperTree) -> list[set[tuple[int, int]]]:
+    """Per direction (+x, -x, +y, -y): the pairs (a, b) of face-adjacent leaves
+    (not OUT) with b across a's face, from the leaves' cells on the finest grid."""
+    pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=1)
+    sizes = tree.layout.cell_sizes(tree.levels)
+    extent = 1 << np.asarray(tree.max_depth)
+    out: list[set[tuple[int, int]]] = [set() for _ in range(4)]
+    for a, b in pairs.tolist() + pairs[:, ::-1].tolist():
+        for axis in range(2):
+            end_a = tree.anchors[a, axis] + sizes[a, axis]
+            end_b = tree.anchors[b, axis] + sizes[b, axis]
+            if axis in tree.periodic:
+                end_a, end_b = end_a % extent[axis], end_b % extent[axis]
+            if end_a == tree.anchors[b, axis]:
+                out[2 * axis].add((a, b))
+            if tree.anchors[a, axis] == end_b:
+                out[2 * axis + 1].add((a, b))
+    return out
+
+
+def reference_attached(done, nodes, bits, exists, faces, neighbours, spans):
+    """The least fixed point, by sweeps until nothing changes."""
+    m, slots = exists.shape
+    row = {(int(a), int(p)): r for r, (a, p) in enumerate(nodes.tolist())}
+    attached = ~exists | done[nodes[:, 0], nodes[:, 1]][:, None]
+    first = attached.copy()
+
+    def meet(ra: int, ca: int, rb: int, cb: int) -> bool:
+        sa, sb = spans[ra, ca], spans[rb, cb]
+        return bool(((sa[:, 0] <= sb[:, 1] + _SPAN_TOL) & (sb[:, 0] <= sa[:, 1] + _SPAN_TOL)).all())
+
+    def clear(r: int, c: int, f: int) -> bool:
+        leaf, p = nodes[r]
+        if neighbours.open[leaf, f]:
+            return False
+        for a, b in neighbours.pairs[f].tolist():
+            if a != leaf or done[b, p]:
+                continue
+            if (b, p) not in row:
+                return False
+            rb = row[b, p]
+            for cb in range(slots):
+                if not first[rb, cb] and meet(r, c, rb, cb) and not attached[rb, cb]:
+                    return False
+        return True
+
+    changed = True
+    while changed:
+        changed = False
+        for r in range(m):
+            for c in range(slots):
+                if attached[r, c]:
+                    continue
+                for d in range(faces.shape[0]):
+                    if not (int(bits[r, c]) >> d) & 1:
+                        continue
+                    if all(clear(r, c, f) for f in range(4) if (int(faces[d, r]) >> f) & 1):
+                        attached[r, c] = changed = True
+                        break
+    state = done.copy()
+    state[nodes[:, 0], nodes[:, 1]] |= attached.all(axis=1)
+    return state & ~done
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_face_sides_and_attachment_match_references(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    tree = random_tree(rng, (1,) if seed % 2 else ())
+    neighbours = face_neighbours(tree)
+    assert [set(map(tuple, p.tolist())) for p in neighbours.pairs] == reference_sides(tree)
+    n, n_post, slots, n_flows = len(tree), 2, 2, 5
+    done = rng.random((n, n_post)) < 0.3
+    done[tree.status == OUT] = True
+    nodes = np.argwhere(~done)
+    nodes = nodes[rng.random(nodes.shape[0]) < 0.9]  # some never listed: they block
+    m = nodes.shape[0]
+    bits = rng.integers(0, 1 << n_flows, size=(m, slots)).astype(np.uint64)
+    exists = rng.random((m, slots)) < 0.8
+    faces = rng.integers(0, 16, size=(n_flows, m)).astype(np.uint8)
+    faces[0] = 0  # a flow that leaves through no face attaches at once
+    spans = np.sort(rng.random((m, slots, 1, 2)), axis=-1)
+    for s in (spans, None):
+        got = attached_nodes(done, nodes, bits, exists, faces, neighbours, s)
+        full = np.broadcast_to(np.array([0.0, 1.0]), (m, slots, 1, 2)) if s is None else s
+        want = reference_attached(done, nodes, bits, exists, faces, neighbours, full)
+        assert np.array_equal(got, want)
+        assert want.any() and (~want & ~done).any()  # neither trivial
