@@ -88,11 +88,13 @@ from ..limits import INSIDE, OUTSIDE, STRADDLES, JointLimit
 from ..spec import parse_angle
 from ..types import Array
 from . import expressions as ex
+from . import tape as tp
 from .base import Mechanism
 from .constraint_leg import ConstraintLeg
 from .constraints import ConstraintMargins, Constraints
 
 __all__ = [
+    "BoundExpression",
     "CustomMechanism",
     "PassiveAngle",
     "compile_expression",
@@ -270,7 +272,7 @@ def _rational_float(p: int, q: int) -> float:
 
 
 _PI_IV = Interval(np.float64(np.pi), np.nextafter(np.pi, np.inf))
-_COMMON = {
+_COMMON: dict[str, Callable[..., Any]] = {
     **ex.FUNCTIONS,
     "absolute": ex.absolute,
     "power": ex.power,
@@ -304,8 +306,11 @@ def compile_expression(
     code = compile(source, f"<{key}>", "exec")
     float_ns: dict[str, Any] = dict(_FLOAT_NS)
     interval_ns: dict[str, Any] = dict(_INTERVAL_NS)
+    trace_ns: dict[str, Any] = {name: tp.traced(f, name) for name, f in _COMMON.items()}
+    trace_ns.update(PI=tp.constant(lambda: _PI_IV)(), rational=tp.constant(iv.rational))
     exec(code, float_ns)  # the source is printed from a checked sympy tree
     exec(code, interval_ns)
+    exec(code, trace_ns)
     g_float, g_interval = float_ns["_g"], interval_ns["_g"]
 
     def g(*values: Any) -> Any:
@@ -315,7 +320,47 @@ def compile_expression(
             return g_float(*values)
 
     g.__doc__ = f"{key}: {expr}"
+    # the same source on tracers (moveability.mechanisms.tape), for BoundExpression.tape
+    g.traceable = trace_ns["_g"]  # type: ignore[attr-defined]
     return g
+
+
+class BoundExpression:
+    """A compiled expression of ``(x_1, ..., x_k, q, *parameters)`` with the
+    parameters bound: ``self(x_1, ..., x_k, q)``; :attr:`tape` is its compiled
+    interval enclosure (:mod:`moveability.mechanisms.tape`), or None where the
+    expression cannot be traced.
+
+    Examples
+    --------
+    >>> x, q, a = sympy.symbols("x q a")
+    >>> f = BoundExpression(compile_expression(x - a * sympy.cos(q), [x, q, a]), [2.0], 1)
+    >>> float(f(np.float64(1.0), np.float64(0.0)))
+    -1.0
+    >>> f.tape is not None
+    True
+    """
+
+    def __init__(self, g: Callable[..., Any], values: Sequence[float], k: int) -> None:
+        self.g, self.values, self.k = g, tuple(values), k
+        self._tape: tp.Tape | bool | None = False
+
+    def __call__(self, *xs: Any) -> Any:
+        return self.g(*xs, *self.values)
+
+    @property
+    def tape(self) -> tp.Tape | None:
+        """The traced tape (built on first use)."""
+        if self._tape is False:
+            traceable = getattr(self.g, "traceable", None)
+            tape = None
+            if traceable is not None:
+                try:
+                    tape = tp.trace(lambda *xs: traceable(*xs, *self.values), self.k)
+                except tp.Untraceable:
+                    tape = None
+            self._tape = tape
+        return self._tape if isinstance(self._tape, tp.Tape) else None
 
 
 def modular(expr: sympy.Expr) -> sympy.Expr:
@@ -682,8 +727,7 @@ class CustomMechanism(Mechanism):
             def bind(
                 expr: sympy.Expr, what: str, args: list[sympy.Symbol] = args
             ) -> Callable[..., Any]:
-                g = compile_expression(expr, args, what)
-                return lambda *xs: g(*xs, *values)
+                return BoundExpression(compile_expression(expr, args, what), values, len(pose_syms))
 
             closed = None
             if "branches" in leg:

@@ -47,6 +47,7 @@ __all__ = [
     "sqrt",
     "take",
     "tan",
+    "tiled",
 ]
 
 _INF = np.inf
@@ -72,8 +73,36 @@ def _once(name: str, x: Interval, f: Any) -> Interval:
     evaluated, and the memory goes with the object)."""
     memo: dict[str, Interval] = x.__dict__.setdefault(_SHARED, {})
     if name not in memo:
-        memo[name] = f(x)
+        tile = x.__dict__.get(_TILE)
+        if tile is not None:
+            # x repeats one base interval array: f of the base, repeated (f works
+            # element by element, so these are the bounds f(x) gives)
+            v = _once(name, tile[0], f)
+            memo[name] = Interval(np.tile(v.lo, tile[1]), np.tile(v.hi, tile[1]))
+        else:
+            memo[name] = f(x)
     return memo[name]
+
+
+_TILE = "_tile"
+
+
+def tiled(base: Interval, n: int) -> Interval:
+    """``base`` repeated ``n`` times (1-d), whose :func:`sin`, :func:`cos`, ... are
+    computed on ``base`` once and repeated.
+
+    Examples
+    --------
+    >>> q = tiled(Interval([0.0, 1.0], [0.5, 1.5]), 3)
+    >>> q.lo.tolist()
+    [0.0, 1.0, 0.0, 1.0, 0.0, 1.0]
+    >>> s = sin(q)
+    >>> bool((s.lo == iv.sin(q).lo).all() and (s.hi == iv.sin(q).hi).all())
+    True
+    """
+    out = Interval(np.tile(base.lo, n), np.tile(base.hi, n))
+    out.__dict__[_TILE] = (base, n)
+    return out
 
 
 def take(x: Interval, index: Any) -> Interval:
