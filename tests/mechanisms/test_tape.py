@@ -33,9 +33,7 @@ def boxes(rng: np.random.Generator, n: int, k: int, scale: float) -> tuple[np.nd
 
 
 def same(x: Interval, y: Interval) -> bool:
-    return np.array_equal(x.lo, y.lo, equal_nan=True) and np.array_equal(
-        x.hi, y.hi, equal_nan=True
-    )
+    return np.array_equal(x.lo, y.lo, equal_nan=True) and np.array_equal(x.hi, y.hi, equal_nan=True)
 
 
 def interpreted(g, lo, hi, box, q: Interval) -> Interval:
@@ -91,3 +89,19 @@ def test_untraceable_expressions_have_no_tape(expr) -> None:
     assert g.tape is None
     q = Interval(np.array([0.1]), np.array([0.2]))
     assert np.isfinite(g(Interval([1.0], [1.5]), Interval([2.0], [2.5]), q).lo).all()
+
+
+def test_sine_and_cosine_of_points_match_the_interval_functions() -> None:
+    from moveability import intervals as iv
+    from moveability.mechanisms import expressions as ex
+
+    rng = np.random.default_rng(7)
+    x = np.concatenate([
+        rng.normal(size=2000) * 10.0 ** rng.integers(-20, 20, size=2000),
+        SPECIAL,
+        np.pi * np.arange(-8, 9) / 2,  # the extrema, where the bounds become -1 or 1
+        np.nextafter(np.pi * np.arange(-8, 9) / 2, np.inf),
+    ])  # fmt: skip
+    p = ex.points(x)
+    assert same(ex.sin(p), iv.sin(Interval(x)))
+    assert same(ex.cos(p), iv.cos(Interval(x)))

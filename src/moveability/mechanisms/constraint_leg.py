@@ -595,7 +595,7 @@ class ConstraintLeg:
             m2 = 0.5 * (above_a[active] + above_b[active])
             b = box[active]
             v = self._box_eval(
-                self.f, lo, hi, np.concatenate([b, b]), Interval(np.concatenate([m1, m2]))
+                self.f, lo, hi, np.concatenate([b, b]), ex.points(np.concatenate([m1, m2]))
             )
             k = active.size
             s2 = np.concatenate([sign[active], sign[active]])

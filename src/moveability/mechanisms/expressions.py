@@ -29,9 +29,11 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from .. import intervals as iv
-from ..intervals import Interval
+from ..intervals import _TWO_PI, Interval, _above, _below, _holds_angle
+from ..types import Array
 
 __all__ = [
     "FUNCTIONS",
@@ -42,6 +44,7 @@ __all__ = [
     "exp",
     "is_interval",
     "log",
+    "points",
     "power",
     "sin",
     "sqrt",
@@ -74,7 +77,16 @@ def _once(name: str, x: Interval, f: Any) -> Interval:
     memo: dict[str, Interval] = x.__dict__.setdefault(_SHARED, {})
     if name not in memo:
         tile = x.__dict__.get(_TILE)
-        if tile is not None:
+        if name in ("sin", "cos") and x.__dict__.get(_POINTS):
+            # points: both at once, one sine and one cosine per point
+            flat = np.ascontiguousarray(x.lo, dtype=np.float64).reshape(-1)
+            s_lo, s_hi, c_lo, c_hi = _point_trig(
+                flat, iv._rel(iv._LIB_ULPS), iv._LIB_ULPS * iv._TINY
+            )
+            shape = x.lo.shape
+            memo["sin"] = Interval(s_lo.reshape(shape), s_hi.reshape(shape))
+            memo["cos"] = Interval(c_lo.reshape(shape), c_hi.reshape(shape))
+        elif tile is not None:
             # x repeats one base interval array: f of the base, repeated (f works
             # element by element, so these are the bounds f(x) gives)
             v = _once(name, tile[0], f)
@@ -85,6 +97,68 @@ def _once(name: str, x: Interval, f: Any) -> Interval:
 
 
 _TILE = "_tile"
+_POINTS = "_points"
+
+
+def points(values: Any) -> Interval:
+    """The degenerate intervals ``[v, v]`` of floats ``values``, whose :func:`sin` and
+    :func:`cos` are computed together, one sine and one cosine per point (the
+    bounds :func:`moveability.intervals.sin` and ``cos`` give).
+
+    Examples
+    --------
+    >>> p = points(np.array([0.5, 3.0]))
+    >>> q = Interval(np.array([0.5, 3.0]))
+    >>> all((a.lo == b.lo).all() and (a.hi == b.hi).all()
+    ...     for a, b in ((sin(p), iv.sin(q)), (cos(p), iv.cos(q))))
+    True
+    """
+    out = Interval(values)
+    out.__dict__[_POINTS] = True
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _point_trig(
+    x: Array, rel: float, tiny: float
+) -> tuple[Array, Array, Array, Array]:  # pragma: no cover - compiled
+    """:func:`moveability.intervals.sin` and ``cos`` of the intervals ``[x, x]``: the
+    steps of ``intervals._trig_bounds`` with ``lo = hi``, one libm call per function."""
+    n = x.size
+    s_lo = np.empty(n)
+    s_hi = np.empty(n)
+    c_lo = np.empty(n)
+    c_hi = np.empty(n)
+    for i in range(n):
+        a = x[i]
+        for sine in (True, False):
+            top = 0.5 * np.pi if sine else 0.0
+            bottom = -0.5 * np.pi if sine else np.pi
+            fa = np.sin(a) if sine else np.cos(a)
+            if fa != fa:
+                low = np.nan
+                high = np.nan
+            else:
+                low = fa
+                high = fa
+            wide = a - a >= _TWO_PI
+            if wide or _holds_angle(a, a, bottom):
+                low = -1.0
+            else:
+                low = _below(low, rel, tiny, False)
+            if wide or _holds_angle(a, a, top):
+                high = 1.0
+            else:
+                high = _above(high, rel, tiny, False)
+            low = low if low != low else max(low, -1.0)
+            high = high if high != high else min(high, 1.0)
+            if sine:
+                s_lo[i] = low
+                s_hi[i] = high
+            else:
+                c_lo[i] = low
+                c_hi[i] = high
+    return s_lo, s_hi, c_lo, c_hi
 
 
 def tiled(base: Interval, n: int) -> Interval:
