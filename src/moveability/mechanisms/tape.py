@@ -375,14 +375,19 @@ def _run(
 
 
 def _flat(x: Any, m: int) -> Array:
-    return np.ascontiguousarray(np.broadcast_to(np.asarray(x, dtype=np.float64), (m,)))
+    a = np.asarray(x, dtype=np.float64)
+    if a.shape == (m,) and a.flags.c_contiguous:
+        return a
+    return np.ascontiguousarray(np.broadcast_to(a, (m,)))
 
 
 def run(tape: Tape, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
     """The tape's enclosure over the boxes ``[lo[box[i]], hi[box[i]]]`` (rows of
     ``(n, k)`` arrays) and the joint enclosures ``q`` (shape ``(m,)``)."""
     m = int(np.size(box))
-    box_i = np.ascontiguousarray(np.broadcast_to(np.asarray(box, dtype=np.int64), (m,)))
+    box_i = np.asarray(box, dtype=np.int64)
+    if box_i.shape != (m,) or not box_i.flags.c_contiguous:
+        box_i = np.ascontiguousarray(np.broadcast_to(box_i, (m,)))
     lo_c = np.ascontiguousarray(lo, dtype=np.float64)
     hi_c = np.ascontiguousarray(hi, dtype=np.float64)
     extra_lo = np.empty((len(tape.derived), m))
@@ -401,8 +406,8 @@ def run(tape: Tape, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
             v = function(*values)
         if not isinstance(v, Interval):
             v = Interval(v)
-        extra_lo[e] = np.broadcast_to(v.lo, (m,))
-        extra_hi[e] = np.broadcast_to(v.hi, (m,))
+        extra_lo[e] = v.lo  # a copy (broadcast where v is one interval)
+        extra_hi[e] = v.hi
     out_lo = np.empty(m)
     out_hi = np.empty(m)
     _run(
