@@ -75,6 +75,7 @@ from numpy.typing import NDArray
 from ..intervals import Interval
 from ..types import Array
 from . import expressions as ex
+from . import tape
 from .base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, LegReach
 from .tape import run as run_tape
 
@@ -582,6 +583,14 @@ class ConstraintLeg:
         # upper bound: the smallest point certified above it (sign * F > 0)
         above_a = runs.start[idx].copy()
         above_b = runs.end.hi[idx].copy()
+        compiled = getattr(self.f, "tape", None)
+        kinds = None if compiled is None else tape.trig_kinds(compiled)
+        if compiled is not None and kinds is not None:
+            # the same steps in one compiled loop (moveability.mechanisms.tape.contract)
+            return tape.contract(
+                compiled, kinds, lo, hi, box, sign, (below_a, below_b), (above_a, above_b),
+                iterations, rtol,
+            )  # fmt: skip
         active = np.arange(box.size)
         for _ in range(iterations):
             width = above_b[active] - below_a[active]

@@ -47,6 +47,7 @@ from numpy.typing import NDArray
 
 from ..intervals import Interval, interval_add, interval_mul, interval_sub
 from ..types import Array
+from .expressions import point_sin_cos
 
 __all__ = ["Tape", "Untraceable", "constant", "run", "trace", "trace_all", "traced"]
 
@@ -298,6 +299,40 @@ _BLOCK = 256
 
 
 @njit(cache=True, nogil=True)
+def _ops(code: NDArray[np.int64], r_lo: Array, r_hi: Array, n: int) -> None:  # pragma: no cover
+    """The tape's operations over the first ``n`` columns of the registers."""
+    for p in range(code.shape[0]):
+        op = code[p, 0]
+        t_lo = r_lo[code[p, 1]]
+        t_hi = r_hi[code[p, 1]]
+        a_lo = r_lo[code[p, 2]]
+        a_hi = r_hi[code[p, 2]]
+        b_lo = r_lo[code[p, 3]]
+        b_hi = r_hi[code[p, 3]]
+        if op == 0:
+            for e in range(n):
+                t_lo[e], t_hi[e] = interval_add(a_lo[e], a_hi[e], b_lo[e], b_hi[e])
+        elif op == 1:
+            for e in range(n):
+                t_lo[e], t_hi[e] = interval_sub(a_lo[e], a_hi[e], b_lo[e], b_hi[e])
+        elif op == 2:
+            for e in range(n):
+                t_lo[e], t_hi[e] = interval_mul(a_lo[e], a_hi[e], b_lo[e], b_hi[e])
+        elif op == 3:
+            for e in range(n):
+                x_lo = a_lo[e]
+                t_lo[e] = -a_hi[e]
+                t_hi[e] = -x_lo
+        else:
+            for e in range(n):
+                x_lo = a_lo[e]
+                x_hi = a_hi[e]
+                s_lo, s_hi = interval_mul(x_lo, x_hi, x_lo, x_hi)
+                t_lo[e] = 0.0 if (x_lo <= 0.0 and x_hi >= 0.0) else _max0(s_lo)
+                t_hi[e] = s_hi
+
+
+@njit(cache=True, nogil=True)
 def _run(
     code: NDArray[np.int64],
     const_lo: Array,
@@ -340,35 +375,7 @@ def _run(
             for e in range(n):
                 r_lo[k + 1 + x, e] = extra_lo[x, start + e]
                 r_hi[k + 1 + x, e] = extra_hi[x, start + e]
-        for p in range(code.shape[0]):
-            op = code[p, 0]
-            t_lo = r_lo[code[p, 1]]
-            t_hi = r_hi[code[p, 1]]
-            a_lo = r_lo[code[p, 2]]
-            a_hi = r_hi[code[p, 2]]
-            b_lo = r_lo[code[p, 3]]
-            b_hi = r_hi[code[p, 3]]
-            if op == 0:
-                for e in range(n):
-                    t_lo[e], t_hi[e] = interval_add(a_lo[e], a_hi[e], b_lo[e], b_hi[e])
-            elif op == 1:
-                for e in range(n):
-                    t_lo[e], t_hi[e] = interval_sub(a_lo[e], a_hi[e], b_lo[e], b_hi[e])
-            elif op == 2:
-                for e in range(n):
-                    t_lo[e], t_hi[e] = interval_mul(a_lo[e], a_hi[e], b_lo[e], b_hi[e])
-            elif op == 3:
-                for e in range(n):
-                    x_lo = a_lo[e]
-                    t_lo[e] = -a_hi[e]
-                    t_hi[e] = -x_lo
-            else:
-                for e in range(n):
-                    x_lo = a_lo[e]
-                    x_hi = a_hi[e]
-                    s_lo, s_hi = interval_mul(x_lo, x_hi, x_lo, x_hi)
-                    t_lo[e] = 0.0 if (x_lo <= 0.0 and x_hi >= 0.0) else _max0(s_lo)
-                    t_hi[e] = s_hi
+        _ops(code, r_lo, r_hi, n)
         for e in range(n):
             out_lo[start + e] = r_lo[out, e]
             out_hi[start + e] = r_hi[out, e]
@@ -439,3 +446,167 @@ def trace_all(functions: Sequence[Callable[..., Any]], k: int) -> list[Tape | No
         except Untraceable:
             out.append(None)
     return out
+
+
+# --------------------------------------------------------------- contraction
+_SIN, _COS = 0, 1
+
+
+def trig_kinds(tape: Tape) -> NDArray[np.int64] | None:
+    """Per derived input, 0 for ``sin(q)`` and 1 for ``cos(q)`` of the joint (the
+    functions of :mod:`~moveability.mechanisms.expressions`); None if the tape has
+    any other derived input (:func:`contract` then does not apply)."""
+    from . import expressions as ex
+
+    kinds = []
+    for function, args in tape.derived:
+        if args != (tape.k,):
+            return None
+        if function is ex.sin:
+            kinds.append(_SIN)
+        elif function is ex.cos:
+            kinds.append(_COS)
+        else:
+            return None
+    return np.array(kinds, dtype=np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _contract(
+    code: NDArray[np.int64],
+    const_lo: Array,
+    const_hi: Array,
+    k: int,
+    kinds: NDArray[np.int64],
+    slots: int,
+    out: int,
+    lo: Array,
+    hi: Array,
+    box: NDArray[np.int64],
+    sign: Array,
+    below_a: Array,
+    below_b: Array,
+    above_a: Array,
+    above_b: Array,
+    iterations: int,
+    rtol: float,
+    trig_rel: float,
+    trig_tiny: float,
+) -> None:  # pragma: no cover - compiled
+    """The bisection of ``ConstraintLeg._contract`` on F's sign, every iteration
+    over the runs still active, the tape evaluated at ``[m, m]`` (its sines and
+    cosines by ``expressions.point_sin_cos``): the same steps on the same floats."""
+    block = _BLOCK
+    r_lo = np.empty((slots, block))
+    r_hi = np.empty((slots, block))
+    n_extra = kinds.size
+    first_const = k + 1 + n_extra
+    for c in range(const_lo.size):
+        for e in range(block):
+            r_lo[first_const + c, e] = const_lo[c]
+            r_hi[first_const + c, e] = const_hi[c]
+    n = box.size
+    active = np.arange(n)
+    count = n
+    # each block evaluates the points of half a block of runs: m1 then m2
+    half = block // 2
+    for _ in range(iterations):
+        kept = 0
+        for a in range(count):
+            i = active[a]
+            width = above_b[i] - below_a[i]
+            done = (below_b[i] - below_a[i] <= rtol * width) and (
+                above_b[i] - above_a[i] <= rtol * width
+            )
+            if not done:
+                active[kept] = i
+                kept += 1
+        count = kept
+        if count == 0:
+            break
+        for start in range(0, count, half):
+            m = min(half, count - start)
+            for e in range(2 * m):
+                i = active[start + (e % m)]
+                if e < m:
+                    point = 0.5 * (below_a[i] + below_b[i])
+                else:
+                    point = 0.5 * (above_a[i] + above_b[i])
+                b = box[i]
+                for j in range(k):
+                    r_lo[j, e] = lo[b, j]
+                    r_hi[j, e] = hi[b, j]
+                r_lo[k, e] = point
+                r_hi[k, e] = point
+                if n_extra:
+                    s_lo, s_hi, c_lo, c_hi = point_sin_cos(point, trig_rel, trig_tiny)
+                    for x in range(n_extra):
+                        if kinds[x] == 0:
+                            r_lo[k + 1 + x, e] = s_lo
+                            r_hi[k + 1 + x, e] = s_hi
+                        else:
+                            r_lo[k + 1 + x, e] = c_lo
+                            r_hi[k + 1 + x, e] = c_hi
+            _ops(code, r_lo, r_hi, 2 * m)
+            for e in range(m):
+                i = active[start + e]
+                m1 = r_lo[k, e]
+                m2 = r_lo[k, m + e]
+                v1_lo = r_lo[out, e]
+                v1_hi = r_hi[out, e]
+                v2_lo = r_lo[out, m + e]
+                v2_hi = r_hi[out, m + e]
+                up = sign[i] > 0
+                neg = (v1_hi < 0) if up else (v1_lo > 0)
+                pos = (v2_lo > 0) if up else (v2_hi < 0)
+                if neg:
+                    below_a[i] = m1
+                else:
+                    below_b[i] = m1
+                if pos:
+                    above_b[i] = m2
+                else:
+                    above_a[i] = m2
+
+
+def contract(
+    tape: Tape,
+    kinds: NDArray[np.int64],
+    lo: Array,
+    hi: Array,
+    box: NDArray[np.intp],
+    sign: Array,
+    below: tuple[Array, Array],
+    above: tuple[Array, Array],
+    iterations: int,
+    rtol: float,
+) -> tuple[Array, Array]:
+    """``ConstraintLeg._contract`` compiled: the runs' brackets ``below`` (a point
+    certified below the root, one not) and ``above``, halved ``iterations`` times at
+    most; returns the lower and upper bounds. ``kinds`` from :func:`trig_kinds`."""
+    from . import expressions as ex
+
+    below_a, below_b = (np.array(v, dtype=np.float64) for v in below)
+    above_a, above_b = (np.array(v, dtype=np.float64) for v in above)
+    _contract(
+        tape.code,
+        tape.const_lo,
+        tape.const_hi,
+        tape.k,
+        kinds,
+        tape.slots,
+        tape.out,
+        np.ascontiguousarray(lo, dtype=np.float64),
+        np.ascontiguousarray(hi, dtype=np.float64),
+        np.ascontiguousarray(box, dtype=np.int64),
+        np.ascontiguousarray(sign, dtype=np.float64),
+        below_a,
+        below_b,
+        above_a,
+        above_b,
+        int(iterations),
+        float(rtol),
+        ex.TRIG_REL,
+        ex.TRIG_TINY,
+    )
+    return below_a, above_b
