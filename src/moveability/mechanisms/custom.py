@@ -62,7 +62,18 @@ each derivative is printed as Python code calling the guarded functions of
 :mod:`moveability.mechanisms.expressions`, so one function evaluates both on
 float arrays and on intervals. Numbers are kept exact (rationals) and
 enclosed when evaluated over intervals; parameters enter as numbers at
-evaluation.
+evaluation. Over intervals, each leg function is also traced once into a
+compiled tape (:mod:`moveability.mechanisms.tape`, :class:`BoundExpression`),
+which gives the same bounds without the interpreter.
+
+The normalised spec and the printed bodies are kept in a cache
+(``$MOVEABILITY_CACHE_DIR``, else ``$XDG_CACHE_HOME/moveability`` or
+``~/.cache/moveability``; an empty ``MOVEABILITY_CACHE_DIR`` turns it off),
+keyed by the spec as given (with the types of its values), the source of this
+module and of :mod:`moveability.spec`, and sympy's version: a spec met before
+is built without importing sympy. A body read back is compiled only if it is
+one the printer could have written (numbers, the arguments, ``PI``, ``+``,
+``*`` and calls of the guarded functions).
 
 Entry points: :func:`normalise_custom_spec` and :class:`CustomMechanism`.
 """
