@@ -32,7 +32,7 @@ import numpy as np
 from numba import njit
 
 from .. import intervals as iv
-from ..intervals import _TWO_PI, Interval, _above, _below, _holds_angle
+from ..intervals import Interval, point_sin_cos
 from ..types import Array
 
 __all__ = [
@@ -80,7 +80,7 @@ def _once(name: str, x: Interval, f: Any) -> Interval:
         if name in ("sin", "cos") and x.__dict__.get(_POINTS):
             # points: both at once, one sine and one cosine per point
             flat = np.ascontiguousarray(x.lo, dtype=np.float64).reshape(-1)
-            s_lo, s_hi, c_lo, c_hi = _point_trig(flat, TRIG_REL, TRIG_TINY)
+            s_lo, s_hi, c_lo, c_hi = _point_trig(flat)
             shape = x.lo.shape
             memo["sin"] = Interval(s_lo.reshape(shape), s_hi.reshape(shape))
             memo["cos"] = Interval(c_lo.reshape(shape), c_hi.reshape(shape))
@@ -117,65 +117,16 @@ def points(values: Any) -> Interval:
 
 
 @njit(cache=True, nogil=True)
-def point_sin_cos(
-    a: float, rel: float, tiny: float
-) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """:func:`moveability.intervals.sin` and ``cos`` of the interval ``[a, a]``
-    (``rel``, ``tiny``: their widening): the steps of ``intervals._trig_bounds``
-    with ``lo = hi``, one libm call per function. Returns ``sin`` then ``cos``
-    bounds."""
-    s_lo = 0.0
-    s_hi = 0.0
-    c_lo = 0.0
-    c_hi = 0.0
-    for sine in (True, False):
-        top = 0.5 * np.pi if sine else 0.0
-        bottom = -0.5 * np.pi if sine else np.pi
-        fa = np.sin(a) if sine else np.cos(a)
-        if fa != fa:
-            low = np.nan
-            high = np.nan
-        else:
-            low = fa
-            high = fa
-        wide = a - a >= _TWO_PI
-        if wide or _holds_angle(a, a, bottom):
-            low = -1.0
-        else:
-            low = _below(low, rel, tiny, False)
-        if wide or _holds_angle(a, a, top):
-            high = 1.0
-        else:
-            high = _above(high, rel, tiny, False)
-        low = low if low != low else max(low, -1.0)
-        high = high if high != high else min(high, 1.0)
-        if sine:
-            s_lo = low
-            s_hi = high
-        else:
-            c_lo = low
-            c_hi = high
-    return s_lo, s_hi, c_lo, c_hi
-
-
-@njit(cache=True, nogil=True)
-def _point_trig(
-    x: Array, rel: float, tiny: float
-) -> tuple[Array, Array, Array, Array]:  # pragma: no cover - compiled
-    """:func:`point_sin_cos` of each element of ``x``."""
+def _point_trig(x: Array) -> tuple[Array, Array, Array, Array]:  # pragma: no cover - compiled
+    """:func:`~moveability.intervals.point_sin_cos` of each element of ``x``."""
     n = x.size
     s_lo = np.empty(n)
     s_hi = np.empty(n)
     c_lo = np.empty(n)
     c_hi = np.empty(n)
     for i in range(n):
-        s_lo[i], s_hi[i], c_lo[i], c_hi[i] = point_sin_cos(x[i], rel, tiny)
+        s_lo[i], s_hi[i], c_lo[i], c_hi[i] = point_sin_cos(x[i])
     return s_lo, s_hi, c_lo, c_hi
-
-
-#: the widening of the library functions' results (``intervals.sin``)
-TRIG_REL = iv._rel(iv._LIB_ULPS)
-TRIG_TINY = iv._LIB_ULPS * iv._TINY
 
 
 def tiled(base: Interval, n: int) -> Interval:

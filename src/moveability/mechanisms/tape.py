@@ -45,9 +45,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from ..intervals import Interval, interval_add, interval_mul, interval_sub
+from ..intervals import Interval, interval_add, interval_mul, interval_sub, point_sin_cos
 from ..types import Array
-from .expressions import point_sin_cos
 
 __all__ = ["Tape", "Untraceable", "constant", "run", "trace", "trace_all", "traced"]
 
@@ -490,12 +489,10 @@ def _contract(
     above_b: Array,
     iterations: int,
     rtol: float,
-    trig_rel: float,
-    trig_tiny: float,
 ) -> None:  # pragma: no cover - compiled
     """The bisection of ``ConstraintLeg._contract`` on F's sign, every iteration
     over the runs still active, the tape evaluated at ``[m, m]`` (its sines and
-    cosines by ``expressions.point_sin_cos``): the same steps on the same floats."""
+    cosines by ``intervals.point_sin_cos``): the same steps on the same floats."""
     block = _BLOCK
     r_lo = np.empty((slots, block))
     r_hi = np.empty((slots, block))
@@ -539,7 +536,7 @@ def _contract(
                 r_lo[k, e] = point
                 r_hi[k, e] = point
                 if n_extra:
-                    s_lo, s_hi, c_lo, c_hi = point_sin_cos(point, trig_rel, trig_tiny)
+                    s_lo, s_hi, c_lo, c_hi = point_sin_cos(point)
                     for x in range(n_extra):
                         if kinds[x] == 0:
                             r_lo[k + 1 + x, e] = s_lo
@@ -584,8 +581,6 @@ def contract(
     """``ConstraintLeg._contract`` compiled: the runs' brackets ``below`` (a point
     certified below the root, one not) and ``above``, halved ``iterations`` times at
     most; returns the lower and upper bounds. ``kinds`` from :func:`trig_kinds`."""
-    from . import expressions as ex
-
     below_a, below_b = (np.array(v, dtype=np.float64) for v in below)
     above_a, above_b = (np.array(v, dtype=np.float64) for v in above)
     _contract(
@@ -606,7 +601,5 @@ def contract(
         above_b,
         int(iterations),
         float(rtol),
-        ex.TRIG_REL,
-        ex.TRIG_TINY,
     )
     return below_a, above_b
