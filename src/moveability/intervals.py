@@ -46,6 +46,7 @@ __all__ = [
     "may_contain_angle",
     "mul_into",
     "next_below",
+    "point_sin_cos",
     "power",
     "rational",
     "sin",
@@ -598,6 +599,53 @@ def cos(x: IntervalLike) -> Interval:
 def sin(x: IntervalLike) -> Interval:
     """Sine: exact range of ``sin`` over each interval, widened outwards."""
     return _trig(as_interval(x), sine=True)
+
+
+@njit(cache=True, nogil=True)
+def point_sin_cos(a: float) -> tuple[float, float, float, float]:  # pragma: no cover
+    """:func:`sin` and :func:`cos` of the interval ``[a, a]``, for compiled code:
+    the steps of :func:`_trig_bounds` with ``lo = hi``, one libm call per function
+    (tests/mechanisms/test_tape.py compares them bit for bit). Returns the bounds
+    of the sine, then of the cosine."""
+    rel = _LIB_REL
+    tiny = _LIB_TINY
+    s_lo = 0.0
+    s_hi = 0.0
+    c_lo = 0.0
+    c_hi = 0.0
+    for sine in (True, False):
+        top = 0.5 * np.pi if sine else 0.0
+        bottom = -0.5 * np.pi if sine else np.pi
+        fa = np.sin(a) if sine else np.cos(a)
+        if fa != fa:
+            low = np.nan
+            high = np.nan
+        else:
+            low = fa
+            high = fa
+        wide = a - a >= _TWO_PI
+        if wide or _holds_angle(a, a, bottom):
+            low = -1.0
+        else:
+            low = _below(low, rel, tiny, False)
+        if wide or _holds_angle(a, a, top):
+            high = 1.0
+        else:
+            high = _above(high, rel, tiny, False)
+        low = low if low != low else max(low, -1.0)
+        high = high if high != high else min(high, 1.0)
+        if sine:
+            s_lo = low
+            s_hi = high
+        else:
+            c_lo = low
+            c_hi = high
+    return s_lo, s_hi, c_lo, c_hi
+
+
+#: the widening of the library functions' results, for compiled code
+_LIB_REL = _rel(_LIB_ULPS)
+_LIB_TINY = _LIB_ULPS * _TINY
 
 
 def arccos(x: IntervalLike) -> Interval:

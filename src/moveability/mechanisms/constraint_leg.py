@@ -75,7 +75,9 @@ from numpy.typing import NDArray
 from ..intervals import Interval
 from ..types import Array
 from . import expressions as ex
+from . import tape
 from .base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, LegReach
+from .tape import run as run_tape
 
 __all__ = ["ConstraintLeg"]
 
@@ -218,9 +220,8 @@ class ConstraintLeg:
 
     def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]:
         """Enclosures of ``dF/dX_j`` over boxes of poses and joint enclosures."""
-        coords = [Interval(lo[:, j], hi[:, j]) for j in range(lo.shape[1])]
-        with _quiet():
-            return [_as_iv(g(*coords, angles), lo.shape[0]) for g in self.df_dx]
+        box = np.arange(lo.shape[0])
+        return [self._box_eval(g, lo, hi, box, angles) for g in self.df_dx]
 
     def angles(self, points: Array, clip: bool = False) -> Array:
         """Joint value of each branch at each pose, shape (m, 2); NaN where unreachable.
@@ -349,14 +350,15 @@ class ConstraintLeg:
         edges = np.linspace(start, stop, self.pieces + 1)
         edges[0], edges[-1] = start, stop
         box = np.repeat(np.arange(n), self.pieces)
-        qlo = np.tile(edges[:-1], n)
-        qhi = np.tile(edges[1:], n)
+        # the same pieces for every box: their sines and cosines computed once
+        q_first = ex.tiled(Interval(edges[:-1], edges[1:]), n)
+        qlo, qhi = q_first.lo, q_first.hi
         done: list[_Pieces] = []
         counts = np.zeros(n, dtype=np.int64)
         for level in range(self.depth + 1):
             if not box.size:
                 break
-            q = Interval(qlo, qhi)
+            q = q_first if level == 0 else Interval(qlo, qhi)
             fv = self._f_box(lo, hi, box, q)
             keep = np.flatnonzero(~((fv.lo > 0) | (fv.hi < 0)))
             box, qlo, qhi = box[keep], qlo[keep], qhi[keep]
@@ -394,7 +396,7 @@ class ConstraintLeg:
 
         The mean-value form is computed only where the natural enclosure holds 0:
         elsewhere the natural one already excludes a root (and is returned)."""
-        natural = self._eval(self.f, self._coords(lo, hi, box), q)
+        natural = self._box_eval(self.f, lo, hi, box, q)
         with _quiet():
             n_lo = np.where(np.isnan(natural.lo), -_INF, natural.lo)
             n_hi = np.where(np.isnan(natural.hi), _INF, natural.hi)
@@ -403,13 +405,11 @@ class ConstraintLeg:
             return Interval(n_lo, n_hi)
         box_n = np.asarray(box)[near]
         q_n = ex.take(q, near)
-        # the boxes' intervals, built once for the evaluations (and the joint's
-        # enclosure q_n one object: its sines and cosines are computed once)
-        coords = self._coords(lo, hi, box_n)
+        # the joint's enclosure q_n one object: its sines and cosines are computed once
         centre = 0.5 * (lo + hi)
-        mean = self._eval(self.f, self._coords(centre, centre, box_n), q_n)
+        mean = self._box_eval(self.f, centre, centre, box_n, q_n)
         for j, g in enumerate(self.df_dx):
-            dj = self._eval(g, coords, q_n)
+            dj = self._box_eval(g, lo, hi, box_n, q_n)
             offset = Interval(lo[box_n, j] - centre[box_n, j], hi[box_n, j] - centre[box_n, j])
             # the offsets are rounded: widen them by an ulp of the bounds
             offset = Interval(
@@ -425,6 +425,11 @@ class ConstraintLeg:
         return Interval(n_lo, n_hi)
 
     def _box_eval(self, g: Function, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
+        """``g`` over the boxes ``[lo[box], hi[box]]`` and ``q``: its compiled tape
+        where it has one (the same bounds, :mod:`moveability.mechanisms.tape`)."""
+        compiled = getattr(g, "tape", None)
+        if compiled is not None:
+            return run_tape(compiled, lo, hi, box, q)
         return self._eval(g, self._coords(lo, hi, box), q)
 
     @staticmethod
@@ -578,6 +583,14 @@ class ConstraintLeg:
         # upper bound: the smallest point certified above it (sign * F > 0)
         above_a = runs.start[idx].copy()
         above_b = runs.end.hi[idx].copy()
+        compiled = getattr(self.f, "tape", None)
+        kinds = None if compiled is None else tape.trig_kinds(compiled)
+        if compiled is not None and kinds is not None:
+            # the same steps in one compiled loop (moveability.mechanisms.tape.contract)
+            return tape.contract(
+                compiled, kinds, lo, hi, box, sign, (below_a, below_b), (above_a, above_b),
+                iterations, rtol,
+            )  # fmt: skip
         active = np.arange(box.size)
         for _ in range(iterations):
             width = above_b[active] - below_a[active]
@@ -591,7 +604,7 @@ class ConstraintLeg:
             m2 = 0.5 * (above_a[active] + above_b[active])
             b = box[active]
             v = self._box_eval(
-                self.f, lo, hi, np.concatenate([b, b]), Interval(np.concatenate([m1, m2]))
+                self.f, lo, hi, np.concatenate([b, b]), ex.points(np.concatenate([m1, m2]))
             )
             k = active.size
             s2 = np.concatenate([sign[active], sign[active]])
@@ -647,9 +660,7 @@ class ConstraintLeg:
 
         def g_at(points_lo: Array, points_hi: Array, qq: Interval) -> Interval:
             """G = s2 F over pose boxes (one per piece) and q."""
-            coords = [Interval(points_lo[:, j], points_hi[:, j]) for j in range(k)]
-            with _quiet():
-                v = _as_iv(self.f(*coords, qq), qq.lo.shape[0])
+            v = self._box_eval(self.f, points_lo, points_hi, np.arange(qq.lo.shape[0]), qq)
             return Interval(np.where(s2p > 0, v.lo, -v.hi), np.where(s2p > 0, v.hi, -v.lo))
 
         # a corner certainly reachable (G < 0 at some piece's middle) and one certainly not

@@ -62,7 +62,18 @@ each derivative is printed as Python code calling the guarded functions of
 :mod:`moveability.mechanisms.expressions`, so one function evaluates both on
 float arrays and on intervals. Numbers are kept exact (rationals) and
 enclosed when evaluated over intervals; parameters enter as numbers at
-evaluation.
+evaluation. Over intervals, each leg function is also traced once into a
+compiled tape (:mod:`moveability.mechanisms.tape`, :class:`BoundExpression`),
+which gives the same bounds without the interpreter.
+
+The normalised spec and the printed bodies are kept in a cache
+(``$MOVEABILITY_CACHE_DIR``, else ``$XDG_CACHE_HOME/moveability`` or
+``~/.cache/moveability``; an empty ``MOVEABILITY_CACHE_DIR`` turns it off),
+keyed by the spec as given (with the types of its values), the source of this
+module and of :mod:`moveability.spec`, and sympy's version: a spec met before
+is built without importing sympy. A body read back is compiled only if it is
+one the printer could have written (numbers, the arguments, ``PI``, ``+``,
+``*`` and calls of the guarded functions).
 
 Entry points: :func:`normalise_custom_spec` and :class:`CustomMechanism`.
 """
@@ -70,15 +81,19 @@ Entry points: :func:`normalise_custom_spec` and :class:`CustomMechanism`.
 from __future__ import annotations
 
 import ast
+import functools
+import hashlib
+import importlib.util
+import json
 import keyword
 import math
+import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import sympy
 from numpy.typing import NDArray
 
 from .. import intervals as iv
@@ -88,11 +103,31 @@ from ..limits import INSIDE, OUTSIDE, STRADDLES, JointLimit
 from ..spec import parse_angle
 from ..types import Array
 from . import expressions as ex
+from . import tape as tp
 from .base import Mechanism
 from .constraint_leg import ConstraintLeg
 from .constraints import ConstraintMargins, Constraints
 
+if TYPE_CHECKING:
+    import sympy
+else:
+    if importlib.util.find_spec("sympy") is None:  # the "custom" extra, checked on import
+        raise ModuleNotFoundError("No module named 'sympy'", name="sympy")
+
+    class _LazySympy:
+        """sympy, imported on first use (a second of imports): a spec found in the
+        cache of compiled specs (:func:`_cached`) is built without it."""
+
+        def __getattr__(self, name: str) -> Any:
+            import sympy as module
+
+            globals()["sympy"] = module
+            return getattr(module, name)
+
+    sympy = _LazySympy()
+
 __all__ = [
+    "BoundExpression",
     "CustomMechanism",
     "PassiveAngle",
     "compile_expression",
@@ -113,22 +148,24 @@ _KEYS = (
 _LEG_KEYS = ("joint", "constraint", "kind", "branches", "passive")
 _PASSIVE_KEYS = ("angle", "limits")
 _KINDS = ("revolute", "prismatic")
-_FUNCTIONS = {
-    "sin": sympy.sin,
-    "cos": sympy.cos,
-    "tan": sympy.tan,
-    "sqrt": sympy.sqrt,
-    "exp": sympy.exp,
-    "log": sympy.log,
-    "atan2": sympy.atan2,
-    "abs": sympy.Abs,
-}
+_FUNCTIONS = ("sin", "cos", "tan", "sqrt", "exp", "log", "atan2", "abs")
 _ARITY = {"atan2": 2}
 _RESERVED = {*_FUNCTIONS, "pi", "E", "I"}
 _TWO_PI_LO = math.nextafter(2 * math.pi, 0.0)
 _TWO_PI_HI = math.nextafter(2 * math.pi, math.inf)
 #: atan2 whose value counts modulo 2 pi only (see :func:`modular`)
-_ATAN2_TURN = sympy.Function("atan2_turn")
+
+
+def _sympy_function(name: str) -> Any:
+    """The sympy function an expression calls by ``name``."""
+    return getattr(sympy, "Abs" if name == "abs" else name)
+
+
+@functools.cache
+def _atan2_turn() -> Any:
+    return sympy.Function("atan2_turn")
+
+
 _EXPRESSION_ALLOWED = (
     "an expression of the declared names, numbers, pi, + - * / ** and "
     + ", ".join(sorted(_FUNCTIONS))
@@ -160,9 +197,7 @@ def _parse(text: object, key: str, names: Mapping[str, sympy.Symbol]) -> sympy.E
                 return names[node.id]
             if node.id == "pi":
                 return sympy.pi
-            raise SpecError(
-                key, _EXPRESSION_ALLOWED, Plain(f"unknown symbol {node.id!r} in {key}")
-            )
+            raise SpecError(key, _EXPRESSION_ALLOWED, Plain(f"unknown symbol {node.id!r} in {key}"))
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
             operand = build(node.operand)
             return -operand if isinstance(node.op, ast.USub) else operand
@@ -193,7 +228,7 @@ def _parse(text: object, key: str, names: Mapping[str, sympy.Symbol]) -> sympy.E
                     f"{func} with {_ARITY.get(func, 1)} argument(s)",
                     Plain(ast.unparse(node)),
                 )
-            return _FUNCTIONS[func](*(build(a) for a in node.args))
+            return _sympy_function(func)(*(build(a) for a in node.args))
         raise SpecError(
             key, _EXPRESSION_ALLOWED, Plain(f"unsupported {ast.unparse(node)!r} in {key}")
         )
@@ -248,7 +283,7 @@ class _Printer:
         }
         if isinstance(e, sympy.Function) and e.func in names:
             return f"{names[e.func]}(" + ", ".join(self(a) for a in e.args) + ")"
-        if isinstance(e, sympy.Function) and e.func == _ATAN2_TURN:
+        if isinstance(e, sympy.Function) and e.func == _atan2_turn():
             return "atan2_turn(" + ", ".join(self(a) for a in e.args) + ")"
         if isinstance(e, sympy.sign):
             # derivative of abs: d|u| = sign(u) du, undefined at 0 (guarded over intervals)
@@ -270,7 +305,7 @@ def _rational_float(p: int, q: int) -> float:
 
 
 _PI_IV = Interval(np.float64(np.pi), np.nextafter(np.pi, np.inf))
-_COMMON = {
+_COMMON: dict[str, Callable[..., Any]] = {
     **ex.FUNCTIONS,
     "absolute": ex.absolute,
     "power": ex.power,
@@ -299,13 +334,23 @@ def compile_expression(
     True
     """
     names = {s: f"_a{i}" for i, s in enumerate(args)}
-    body = _Printer(names)(expr)
-    source = f"def _g({', '.join(names.values())}):\n    return {body}\n"
+    g = _compile_body(_Printer(names)(expr), len(args), key)
+    g.__doc__ = f"{key}: {expr}"
+    return g
+
+
+def _compile_body(body: str, n_args: int, key: str) -> Callable[..., Any]:
+    """The function of ``_a0, ..., _a{n_args - 1}`` returning the printed ``body``
+    (see :func:`compile_expression`)."""
+    source = f"def _g({', '.join(f'_a{i}' for i in range(n_args))}):\n    return {body}\n"
     code = compile(source, f"<{key}>", "exec")
     float_ns: dict[str, Any] = dict(_FLOAT_NS)
     interval_ns: dict[str, Any] = dict(_INTERVAL_NS)
+    trace_ns: dict[str, Any] = {name: tp.traced(f, name) for name, f in _COMMON.items()}
+    trace_ns.update(PI=tp.constant(lambda: _PI_IV)(), rational=tp.constant(iv.rational))
     exec(code, float_ns)  # the source is printed from a checked sympy tree
     exec(code, interval_ns)
+    exec(code, trace_ns)
     g_float, g_interval = float_ns["_g"], interval_ns["_g"]
 
     def g(*values: Any) -> Any:
@@ -314,8 +359,48 @@ def compile_expression(
         with np.errstate(all="ignore"):
             return g_float(*values)
 
-    g.__doc__ = f"{key}: {expr}"
+    g.__doc__ = f"{key}: {body}"
+    # the same source on tracers (moveability.mechanisms.tape), for BoundExpression.tape
+    g.traceable = trace_ns["_g"]  # type: ignore[attr-defined]
     return g
+
+
+class BoundExpression:
+    """A compiled expression of ``(x_1, ..., x_k, q, *parameters)`` with the
+    parameters bound: ``self(x_1, ..., x_k, q)``; :attr:`tape` is its compiled
+    interval enclosure (:mod:`moveability.mechanisms.tape`), or None where the
+    expression cannot be traced.
+
+    Examples
+    --------
+    >>> x, q, a = sympy.symbols("x q a")
+    >>> f = BoundExpression(compile_expression(x - a * sympy.cos(q), [x, q, a]), [2.0], 1)
+    >>> float(f(np.float64(1.0), np.float64(0.0)))
+    -1.0
+    >>> f.tape is not None
+    True
+    """
+
+    def __init__(self, g: Callable[..., Any], values: Sequence[float], k: int) -> None:
+        self.g, self.values, self.k = g, tuple(values), k
+        self._tape: tp.Tape | bool | None = False
+
+    def __call__(self, *xs: Any) -> Any:
+        return self.g(*xs, *self.values)
+
+    @property
+    def tape(self) -> tp.Tape | None:
+        """The traced tape (built on first use)."""
+        if self._tape is False:
+            traceable = getattr(self.g, "traceable", None)
+            tape = None
+            if traceable is not None:
+                try:
+                    tape = tp.trace(lambda *xs: traceable(*xs, *self.values), self.k)
+                except tp.Untraceable:
+                    tape = None
+            self._tape = tape
+        return self._tape if isinstance(self._tape, tp.Tape) else None
 
 
 def modular(expr: sympy.Expr) -> sympy.Expr:
@@ -347,7 +432,7 @@ def modular(expr: sympy.Expr) -> sympy.Expr:
             return e
         if isinstance(e, sympy.atan2):
             y, x = (walk(a, False) for a in e.args)
-            return _ATAN2_TURN(y, x) if mod else sympy.atan2(y, x, evaluate=False)
+            return _atan2_turn()(y, x) if mod else sympy.atan2(y, x, evaluate=False)
         if isinstance(e, sympy.sin | sympy.cos | sympy.tan):
             return e.func(walk(e.args[0], True), evaluate=False)
         if mod and isinstance(e, sympy.Add):
@@ -492,6 +577,19 @@ def normalise_custom_spec(data: Mapping[str, Any]) -> dict[str, Any]:
 the declared names, numbers, pi, + - * / ** and abs, atan2, cos, exp, log, sin, sqrt, tan, \
 got unknown symbol 'z' in legs[0].constraint
     """
+    key = _cache_key("spec", data)
+    if key is not None:
+        found = _cache_load(key)
+        if isinstance(found, dict):
+            return found
+    out = _normalise(data)
+    if key is not None:
+        _cache_store(key, out)
+    return out
+
+
+def _normalise(data: Mapping[str, Any]) -> dict[str, Any]:
+    """:func:`normalise_custom_spec` without the cache."""
     if not isinstance(data, Mapping):
         raise SpecError("spec", "a mapping", data)
     for key in data:
@@ -620,6 +718,181 @@ got unknown symbol 'z' in legs[0].constraint
     }
 
 
+def _leg_bodies(spec: Mapping[str, Any]) -> dict[str, str]:
+    """The printed bodies of every function of a normalised spec's legs (sympy):
+    ``"{i}.f"``, ``"{i}.df_dq"``, ``"{i}.d2f_dq2"``, ``"{i}.df_dx.{j}"``,
+    ``"{i}.branch.{b}"``, ``"{i}.passive.{name}"`` for leg ``i``."""
+    pose_syms = [sympy.Symbol(n, real=True) for n in spec["pose"]]
+    param_syms = [sympy.Symbol(n, real=True) for n in spec["parameters"]]
+    symbols = {sym.name: sym for sym in (*pose_syms, *param_syms)}
+    out: dict[str, str] = {}
+    for i, leg in enumerate(spec["legs"]):
+        q = sympy.Symbol(leg["joint"], real=True)
+        f = _parse(leg["constraint"], f"legs[{i}].constraint", {**symbols, q.name: q})
+        names = {sym: f"_a{a}" for a, sym in enumerate([*pose_syms, q, *param_syms])}
+        printer = _Printer(names)
+        out[f"{i}.f"] = printer(f)
+        out[f"{i}.df_dq"] = printer(sympy.diff(f, q))
+        out[f"{i}.d2f_dq2"] = printer(sympy.diff(f, q, 2))
+        for j, x in enumerate(pose_syms):
+            out[f"{i}.df_dx.{j}"] = printer(sympy.diff(f, x))
+        pose_printer = _Printer({sym: f"_a{a}" for a, sym in enumerate([*pose_syms, *param_syms])})
+        for b, text in enumerate(leg.get("branches", [])):
+            out[f"{i}.branch.{b}"] = pose_printer(_parse(text, f"legs[{i}].branches[{b}]", symbols))
+        for name, item in leg.get("passive", {}).items():
+            akey = f"legs[{i}].passive.{name}.angle"
+            out[f"{i}.passive.{name}"] = printer(
+                modular(_parse(item["angle"], akey, {**symbols, q.name: q}))
+            )
+    return out
+
+
+# ------------------------------------------------------------------ the cache
+#: the functions a printed body may call (see _Printer)
+_BODY_CALLS = frozenset(
+    {"sin", "cos", "tan", "exp", "log", "sqrt", "absolute", "atan2", "atan2_turn", "power",
+     "sign", "rational"}
+)  # fmt: skip
+_MEMO: dict[str, Any] = {}
+
+
+def _cache_dir() -> str | None:
+    """Where compiled specs are kept: ``$MOVEABILITY_CACHE_DIR`` (empty: no cache),
+    else ``$XDG_CACHE_HOME/moveability`` or ``~/.cache/moveability``."""
+    chosen = os.environ.get("MOVEABILITY_CACHE_DIR")
+    if chosen is not None:
+        return chosen or None
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "moveability")
+
+
+@functools.cache
+def _fingerprint() -> str:
+    """What the cached results depend on: the source of this module and of
+    :mod:`moveability.spec` (angles as ``"pi/2"``), and sympy's version."""
+    import importlib.metadata
+
+    digest = hashlib.sha256()
+    for path in (__file__, os.path.join(os.path.dirname(__file__), "..", "spec.py")):
+        with open(path, "rb") as handle:
+            digest.update(handle.read())
+    try:
+        digest.update(importlib.metadata.version("sympy").encode())
+    except importlib.metadata.PackageNotFoundError:  # pragma: no cover
+        digest.update(b"?")
+    return digest.hexdigest()
+
+
+def _canonical(value: object) -> object:
+    """``value`` as JSON telling its types apart (tuple from list, int from float);
+    ValueError for anything else."""
+    if value is None or isinstance(value, str | bool):
+        return value
+    if isinstance(value, int):
+        return {"i": str(value)}
+    if isinstance(value, float):
+        return {"f": repr(value)}
+    if isinstance(value, Mapping):
+        return {"d": [[_canonical(k), _canonical(v)] for k, v in value.items()]}
+    if isinstance(value, list | tuple):
+        return {"l" if isinstance(value, list) else "t": [_canonical(v) for v in value]}
+    raise ValueError(type(value).__name__)
+
+
+def _cache_key(kind: str, data: object) -> str | None:
+    try:
+        text = json.dumps([kind, _canonical(data)], separators=(",", ":"))
+    except (ValueError, TypeError, RecursionError):
+        return None
+    return hashlib.sha256((_fingerprint() + text).encode()).hexdigest()
+
+
+def _cache_load(key: str) -> Any:
+    """The cached JSON value of ``key`` (in this process, else on disk), or None."""
+    if key in _MEMO:
+        return json.loads(_MEMO[key])
+    folder = _cache_dir()
+    if folder is None:
+        return None
+    try:
+        with open(os.path.join(folder, key + ".json"), encoding="utf-8") as handle:
+            text = handle.read()
+        value = json.loads(text)
+    except (OSError, ValueError):
+        return None
+    _MEMO[key] = text
+    return value
+
+
+def _cache_store(key: str, value: Any) -> None:
+    """Keep ``value`` (JSON) for ``key``; a cache that cannot be written is skipped."""
+    text = json.dumps(value, separators=(",", ":"))
+    _MEMO[key] = text
+    folder = _cache_dir()
+    if folder is None:
+        return
+    try:
+        os.makedirs(folder, exist_ok=True)
+        path = os.path.join(folder, key + ".json")
+        tmp = f"{path}.{os.getpid()}.tmp"
+        with open(tmp, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except OSError:
+        pass
+
+
+def _body_ok(body: object, n_args: int) -> bool:
+    """Whether a cached body is one :class:`_Printer` could print: numbers, the
+    arguments, ``PI``, ``+``, ``*``, negative integers and calls of the guarded
+    functions, nothing else (so that compiling it runs no other code)."""
+    if not isinstance(body, str):
+        return False
+    try:
+        tree = ast.parse(body, mode="eval")
+    except SyntaxError:
+        return False
+    names = {f"_a{i}" for i in range(n_args)} | {"PI"}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Expression | ast.Load | ast.Add | ast.Mult | ast.USub):
+            continue
+        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add | ast.Mult):
+            continue
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+            continue
+        if isinstance(node, ast.Constant) and type(node.value) is int:
+            continue
+        if isinstance(node, ast.Name) and (node.id in names or node.id in _BODY_CALLS):
+            continue
+        if (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Name)
+            and node.func.id in _BODY_CALLS
+            and not node.keywords
+        ):
+            continue
+        return False
+    return True
+
+
+def _bodies(spec: Mapping[str, Any]) -> dict[str, str]:
+    """:func:`_leg_bodies`, kept in the cache of compiled specs (checked when read)."""
+    key = _cache_key("bodies", spec)
+    if key is not None:
+        found = _cache_load(key)
+        if isinstance(found, dict):
+            k, p = len(spec["pose"]), len(spec["parameters"])
+            if all(
+                _body_ok(body, k + p if ".branch." in name else k + 1 + p)
+                for name, body in found.items()
+            ):
+                return found
+    bodies = _leg_bodies(spec)
+    if key is not None:
+        _cache_store(key, bodies)
+    return bodies
+
+
 @dataclass(frozen=True)
 class PassiveAngle:
     """A passive angle of a leg: ``function(*pose, q_leg)`` (floats or intervals,
@@ -666,32 +939,26 @@ class CustomMechanism(Mechanism):
         self.pose_names = tuple(s["pose"])
         self.periodic_axes = tuple(s["pose"].index(n) for n in s["periodic"])
         params = s["parameters"]
-        pose_syms = [sympy.Symbol(n, real=True) for n in s["pose"]]
-        param_syms = [sympy.Symbol(n, real=True) for n in params]
         values = [params[n] for n in params]
-        symbols = {sym.name: sym for sym in (*pose_syms, *param_syms)}
+        k = len(s["pose"])
+        bodies = _bodies(s)
         legs = []
         limits = []
         passive: list[PassiveAngle] = []
         for i, leg in enumerate(s["legs"]):
-            q = sympy.Symbol(leg["joint"], real=True)
             key = f"legs[{i}].constraint"
-            f = _parse(leg["constraint"], key, {**symbols, q.name: q})
-            args = [*pose_syms, q, *param_syms]
+            n_args = k + 1 + len(params)
 
-            def bind(
-                expr: sympy.Expr, what: str, args: list[sympy.Symbol] = args
-            ) -> Callable[..., Any]:
-                g = compile_expression(expr, args, what)
-                return lambda *xs: g(*xs, *values)
+            def bind(name: str, what: str, n_args: int = n_args) -> Callable[..., Any]:
+                g = _compile_body(bodies[name], n_args, what)
+                return BoundExpression(g, values, k)
 
             closed = None
             if "branches" in leg:
-                exprs = [
-                    _parse(b, f"legs[{i}].branches[{k}]", symbols)
-                    for k, b in enumerate(leg["branches"])
+                fns = [
+                    _compile_body(bodies[f"{i}.branch.{b}"], k + len(params), "expression")
+                    for b in range(len(leg["branches"]))
                 ]
-                fns = [compile_expression(e, [*pose_syms, *param_syms]) for e in exprs]
 
                 def closed_form(points: Array, fns: Any = fns) -> Array:
                     cols = [points[:, j] for j in range(points.shape[1])]
@@ -712,13 +979,16 @@ class CustomMechanism(Mechanism):
                 limits.append(JointLimit.unlimited())
             else:
                 limits.append(JointLimit(limit[0], limit[1], prismatic=prismatic))
+            q_name = leg["joint"]
             legs.append(
                 ConstraintLeg(
                     leg["joint"],
-                    f=bind(f, key),
-                    df_dq=bind(sympy.diff(f, q), f"d{key}/d{q.name}"),
-                    d2f_dq2=bind(sympy.diff(f, q, 2), f"d2{key}/d{q.name}2"),
-                    df_dx=tuple(bind(sympy.diff(f, x), f"d{key}/d{x.name}") for x in pose_syms),
+                    f=bind(f"{i}.f", key),
+                    df_dq=bind(f"{i}.df_dq", f"d{key}/d{q_name}"),
+                    d2f_dq2=bind(f"{i}.d2f_dq2", f"d2{key}/d{q_name}2"),
+                    df_dx=tuple(
+                        bind(f"{i}.df_dx.{j}", f"d{key}/d{x}") for j, x in enumerate(s["pose"])
+                    ),
                     prismatic=prismatic,
                     stroke=(limit[0], limit[1]) if prismatic else None,
                     closed_form=closed,
@@ -726,9 +996,10 @@ class CustomMechanism(Mechanism):
             )
             for name, item in leg.get("passive", {}).items():
                 akey = f"legs[{i}].passive.{name}.angle"
-                angle = modular(_parse(item["angle"], akey, {**symbols, q.name: q}))
                 lo, hi = item["limits"]
-                passive.append(PassiveAngle(name, i, bind(angle, akey), JointLimit(lo, hi)))
+                passive.append(
+                    PassiveAngle(name, i, bind(f"{i}.passive.{name}", akey), JointLimit(lo, hi))
+                )
         self.passive_angles = tuple(passive)
         if passive:
             self.restrictions = Constraints(passive={a.name: a.limit for a in passive})

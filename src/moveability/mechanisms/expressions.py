@@ -29,9 +29,11 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from .. import intervals as iv
-from ..intervals import Interval
+from ..intervals import Interval, point_sin_cos
+from ..types import Array
 
 __all__ = [
     "FUNCTIONS",
@@ -42,11 +44,13 @@ __all__ = [
     "exp",
     "is_interval",
     "log",
+    "points",
     "power",
     "sin",
     "sqrt",
     "take",
     "tan",
+    "tiled",
 ]
 
 _INF = np.inf
@@ -72,8 +76,75 @@ def _once(name: str, x: Interval, f: Any) -> Interval:
     evaluated, and the memory goes with the object)."""
     memo: dict[str, Interval] = x.__dict__.setdefault(_SHARED, {})
     if name not in memo:
-        memo[name] = f(x)
+        tile = x.__dict__.get(_TILE)
+        if name in ("sin", "cos") and x.__dict__.get(_POINTS):
+            # points: both at once, one sine and one cosine per point
+            flat = np.ascontiguousarray(x.lo, dtype=np.float64).reshape(-1)
+            s_lo, s_hi, c_lo, c_hi = _point_trig(flat)
+            shape = x.lo.shape
+            memo["sin"] = Interval(s_lo.reshape(shape), s_hi.reshape(shape))
+            memo["cos"] = Interval(c_lo.reshape(shape), c_hi.reshape(shape))
+        elif tile is not None:
+            # x repeats one base interval array: f of the base, repeated (f works
+            # element by element, so these are the bounds f(x) gives)
+            v = _once(name, tile[0], f)
+            memo[name] = Interval(np.tile(v.lo, tile[1]), np.tile(v.hi, tile[1]))
+        else:
+            memo[name] = f(x)
     return memo[name]
+
+
+_TILE = "_tile"
+_POINTS = "_points"
+
+
+def points(values: Any) -> Interval:
+    """The degenerate intervals ``[v, v]`` of floats ``values``, whose :func:`sin` and
+    :func:`cos` are computed together, one sine and one cosine per point (the
+    bounds :func:`moveability.intervals.sin` and ``cos`` give).
+
+    Examples
+    --------
+    >>> p = points(np.array([0.5, 3.0]))
+    >>> q = Interval(np.array([0.5, 3.0]))
+    >>> all((a.lo == b.lo).all() and (a.hi == b.hi).all()
+    ...     for a, b in ((sin(p), iv.sin(q)), (cos(p), iv.cos(q))))
+    True
+    """
+    out = Interval(values)
+    out.__dict__[_POINTS] = True
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _point_trig(x: Array) -> tuple[Array, Array, Array, Array]:  # pragma: no cover - compiled
+    """:func:`~moveability.intervals.point_sin_cos` of each element of ``x``."""
+    n = x.size
+    s_lo = np.empty(n)
+    s_hi = np.empty(n)
+    c_lo = np.empty(n)
+    c_hi = np.empty(n)
+    for i in range(n):
+        s_lo[i], s_hi[i], c_lo[i], c_hi[i] = point_sin_cos(x[i])
+    return s_lo, s_hi, c_lo, c_hi
+
+
+def tiled(base: Interval, n: int) -> Interval:
+    """``base`` repeated ``n`` times (1-d), whose :func:`sin`, :func:`cos`, ... are
+    computed on ``base`` once and repeated.
+
+    Examples
+    --------
+    >>> q = tiled(Interval([0.0, 1.0], [0.5, 1.5]), 3)
+    >>> q.lo.tolist()
+    [0.0, 1.0, 0.0, 1.0, 0.0, 1.0]
+    >>> s = sin(q)
+    >>> bool((s.lo == iv.sin(q).lo).all() and (s.hi == iv.sin(q).hi).all())
+    True
+    """
+    out = Interval(np.tile(base.lo, n), np.tile(base.hi, n))
+    out.__dict__[_TILE] = (base, n)
+    return out
 
 
 def take(x: Interval, index: Any) -> Interval:

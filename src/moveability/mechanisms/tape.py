@@ -1,0 +1,605 @@
+"""Compiled enclosures of user-defined expressions: a traced tape run by one kernel.
+
+A constraint of a user-defined leg (:mod:`moveability.mechanisms.custom`) is
+printed as Python calling the guarded functions of
+:mod:`moveability.mechanisms.expressions`; evaluated on
+:class:`~moveability.intervals.Interval` operands, each ``+ - *`` and power
+allocates arrays and goes through Python. Here the same function is run once
+on *tracers*: every interval operation it would perform on the inputs is
+recorded, in order, on a tape (sums, differences, products, negations and
+squares), the numbers and constant intervals it meets are kept as constants,
+and a function of the inputs alone (``sin(t)``, ``cos(t)``, ...) becomes a
+*derived input*, computed outside the tape by the very function the
+interpreted path calls (so the remembered sines of a joint enclosure are
+shared as before). :func:`run` then evaluates the tape over many boxes in one
+compiled loop, element by element, with the compiled forms of the interval
+operations (:func:`~moveability.intervals.interval_add`,
+:func:`~moveability.intervals.interval_mul`, ...): bit for bit the bounds of
+the interpreted path (``tests/mechanisms/test_tape.py``), without its
+temporaries. An expression using anything else on a non-input value (``sqrt``
+of a sum, a division, a power above 2) gives no tape and stays interpreted.
+
+Examples
+--------
+>>> import numpy as np
+>>> from moveability.intervals import Interval
+>>> from moveability.mechanisms import expressions as ex
+>>> cos = traced(ex.cos, "cos")
+>>> t = trace(lambda x, q: (x - 2.0 * cos(q)) ** 2 + 1.5 * x, 1)
+>>> lo, hi = np.array([[0.0], [1.0]]), np.array([[0.5], [2.0]])
+>>> q = Interval(np.array([0.0, 1.0]), np.array([0.1, 1.2]))
+>>> r = run(t, lo, hi, np.array([0, 1]), q)
+>>> x = Interval(lo[:, 0], hi[:, 0])
+>>> plain = (x - 2.0 * ex.cos(q)) ** 2 + 1.5 * x
+>>> bool(np.array_equal(r.lo, plain.lo) and np.array_equal(r.hi, plain.hi))
+True
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from ..intervals import Interval, interval_add, interval_mul, interval_sub, point_sin_cos
+from ..types import Array
+
+__all__ = ["Tape", "Untraceable", "constant", "run", "trace", "trace_all", "traced"]
+
+# opcodes: (op, target slot, operand a, operand b)
+_ADD, _SUB, _MUL, _NEG, _SQUARE = 0, 1, 2, 3, 4
+
+
+class Untraceable(Exception):
+    """The expression does something the tape does not record."""
+
+
+@dataclass(frozen=True, eq=False)
+class Tape:
+    """A traced expression: slots ``[0, k)`` the pose coordinates, ``k`` the joint,
+    then the derived inputs, the constants and the temporaries.
+
+    ``derived`` lists, per derived input, the function and the slots of its
+    arguments (inputs only) it is computed from, outside the kernel."""
+
+    k: int
+    derived: tuple[tuple[Callable[..., Any], tuple[int, ...]], ...]
+    const_lo: Array
+    const_hi: Array
+    code: NDArray[np.int64]
+    slots: int
+    out: int
+
+
+class _Recorder:
+    def __init__(self, k: int) -> None:
+        self.k = k
+        self.derived: list[tuple[Callable[..., Any], tuple[int, ...]]] = []
+        self.derived_keys: dict[tuple[Any, tuple[int, ...]], _Node] = {}
+        self.consts: list[tuple[float, float]] = []
+        self.ops: list[tuple[int, int, int, int]] = []
+        self.temps = 0
+
+    def const(self, lo: float, hi: float) -> int:
+        self.consts.append((lo, hi))
+        return -len(self.consts)  # placed after the derived inputs once known
+
+    def op(self, code: int, a: int, b: int) -> _Node:
+        self.temps += 1
+        target = -(10**9) - self.temps  # a temporary, numbered once the layout is known
+        self.ops.append((code, target, a, b))
+        return _Node(self, target, leaf=False)
+
+
+class _Node:
+    """A value depending on the inputs, during a trace."""
+
+    __array_ufunc__ = None
+    __slots__ = ("leaf", "rec", "slot")
+
+    def __init__(self, rec: _Recorder, slot: int, leaf: bool) -> None:
+        self.rec, self.slot, self.leaf = rec, slot, leaf
+
+    def _operand(self, other: Any) -> int:
+        if isinstance(other, _Node):
+            if other.rec is not self.rec:
+                raise Untraceable("two traces")
+            return other.slot
+        lo, hi = _constant(other)
+        return self.rec.const(lo, hi)
+
+    def __add__(self, other: Any) -> _Node:
+        return self.rec.op(_ADD, self.slot, self._operand(other))
+
+    def __radd__(self, other: Any) -> _Node:
+        return self.rec.op(_ADD, self._operand(other), self.slot)
+
+    def __sub__(self, other: Any) -> _Node:
+        return self.rec.op(_SUB, self.slot, self._operand(other))
+
+    def __rsub__(self, other: Any) -> _Node:
+        return self.rec.op(_SUB, self._operand(other), self.slot)
+
+    def __mul__(self, other: Any) -> _Node:
+        return self.rec.op(_MUL, self.slot, self._operand(other))
+
+    def __rmul__(self, other: Any) -> _Node:
+        return self.rec.op(_MUL, self._operand(other), self.slot)
+
+    def __neg__(self) -> _Node:
+        return self.rec.op(_NEG, self.slot, self.slot)
+
+    def __pow__(self, n: Any) -> _Node:
+        return _power(self, n)
+
+    def __truediv__(self, other: Any) -> _Node:
+        raise Untraceable("division")
+
+    __rtruediv__ = __truediv__
+
+
+class _Const:
+    """A constant during a trace (an Interval or a number): operations among
+    constants are done for real, with the objects the interpreted path has."""
+
+    __array_ufunc__ = None
+    __slots__ = ("value",)
+
+    def __init__(self, value: Any) -> None:
+        self.value = value
+
+    def _binary(self, other: Any, f: Callable[[Any, Any], Any]) -> Any:
+        if isinstance(other, _Node):
+            return NotImplemented
+        return _Const(f(self.value, other.value if isinstance(other, _Const) else other))
+
+    def __add__(self, o: Any) -> Any:
+        return self._binary(o, lambda a, b: a + b)
+
+    def __radd__(self, o: Any) -> Any:
+        return self._binary(o, lambda a, b: b + a)
+
+    def __sub__(self, o: Any) -> Any:
+        return self._binary(o, lambda a, b: a - b)
+
+    def __rsub__(self, o: Any) -> Any:
+        return self._binary(o, lambda a, b: b - a)
+
+    def __mul__(self, o: Any) -> Any:
+        return self._binary(o, lambda a, b: a * b)
+
+    def __rmul__(self, o: Any) -> Any:
+        return self._binary(o, lambda a, b: b * a)
+
+    def __truediv__(self, o: Any) -> Any:
+        return self._binary(o, lambda a, b: a / b)
+
+    def __rtruediv__(self, o: Any) -> Any:
+        return self._binary(o, lambda a, b: b / a)
+
+    def __pow__(self, o: Any) -> Any:
+        return self._binary(o, lambda a, b: a**b)
+
+    def __neg__(self) -> Any:
+        return _Const(-self.value)
+
+
+def constant(function: Callable[..., Any]) -> Callable[..., Any]:
+    """``function`` (giving a constant Interval, as ``rational``) for a trace."""
+    return lambda *args: _Const(function(*args))
+
+
+def _constant(value: Any) -> tuple[float, float]:
+    """The bounds the interpreted path gives a constant operand (``as_interval``)."""
+    if isinstance(value, _Const):
+        value = value.value
+    if isinstance(value, Interval):
+        if value.lo.size != 1:
+            raise Untraceable("an array constant")
+        return float(value.lo.reshape(-1)[0]), float(value.hi.reshape(-1)[0])
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+        raise Untraceable(f"a constant {value!r}")
+    v = float(np.asarray(value, dtype=np.float64))
+    return v, v
+
+
+def _power(x: _Node, n: Any) -> _Node:
+    if isinstance(n, bool) or not isinstance(n, int | np.integer):
+        raise Untraceable("a power that is not an integer")
+    if n == 1:
+        return x
+    if n == 2:
+        return x.rec.op(_SQUARE, x.slot, x.slot)
+    raise Untraceable(f"power {n}")
+
+
+def traced(function: Callable[..., Any], name: str) -> Callable[..., Any]:
+    """``function`` (one of :mod:`~moveability.mechanisms.expressions`) for a trace:
+    on numbers and constants, itself; on inputs only, a derived input; ``power``
+    of a value by 1 or 2, a tape operation; anything else is :class:`Untraceable`."""
+
+    def call(*args: Any) -> Any:
+        nodes = [a for a in args if isinstance(a, _Node)]
+        if not nodes:
+            plain = [a.value if isinstance(a, _Const) else a for a in args]
+            value = function(*plain)
+            return _Const(value) if isinstance(value, Interval) else value
+        if name == "power" and len(args) == 2 and isinstance(args[0], _Node):
+            return _power(args[0], args[1])
+        if any(not n.leaf for n in nodes):
+            raise Untraceable(f"{name} of a computed value")
+        if any(not isinstance(a, _Node) for a in args):
+            raise Untraceable(f"{name} of an input and a constant")
+        rec = nodes[0].rec
+        key = (function, tuple(n.slot for n in nodes))
+        if key not in rec.derived_keys:
+            rec.derived.append(key)
+            rec.derived_keys[key] = _Node(rec, -(2 * 10**9) - len(rec.derived), leaf=False)
+        return rec.derived_keys[key]
+
+    return call
+
+
+def trace(function: Callable[..., Any], k: int) -> Tape:
+    """The tape of ``function(x_1, ..., x_k, q)`` as evaluated on Intervals.
+
+    ``function`` must call the functions of its namespace through :func:`traced`
+    (see :func:`moveability.mechanisms.custom.compile_expression`) and use only
+    ``+ - *``, negation and powers on its inputs; numbers among its operands are
+    constants. Raises :class:`Untraceable` otherwise.
+    """
+    rec = _Recorder(k)
+    inputs = [_Node(rec, i, leaf=True) for i in range(k + 1)]
+    result = function(*inputs)
+    if not isinstance(result, _Node):
+        lo, hi = _constant(result)
+        result = _Node(rec, rec.const(lo, hi), leaf=False)
+    # the layout: inputs, derived, constants, temporaries
+    n_derived = len(rec.derived)
+    first_const = k + 1 + n_derived
+    first_temp = first_const + len(rec.consts)
+
+    def slot(s: int) -> int:
+        if s >= 0:
+            return s
+        if s <= -(2 * 10**9):
+            return k + 1 + (-(2 * 10**9) - s) - 1
+        if s <= -(10**9):
+            return first_temp + (-(10**9) - s) - 1
+        return first_const + (-s) - 1
+
+    code = np.array(
+        [(op, slot(t), slot(a), slot(b)) for op, t, a, b in rec.ops], dtype=np.int64
+    ).reshape(-1, 4)
+    consts = np.array(rec.consts, dtype=np.float64).reshape(-1, 2)
+    return Tape(
+        k=k,
+        derived=tuple((f, tuple(slot(a) for a in args)) for f, args in rec.derived),
+        const_lo=np.ascontiguousarray(consts[:, 0]),
+        const_hi=np.ascontiguousarray(consts[:, 1]),
+        code=code,
+        slots=first_temp + rec.temps,
+        out=slot(result.slot),
+    )
+
+
+@njit(cache=True, nogil=True)
+def _max0(x: float) -> float:  # pragma: no cover - compiled
+    """``np.maximum(x, 0.0)``: NaN kept, and ``x`` when equal."""
+    return x if (x >= 0.0 or x != x) else 0.0
+
+
+#: elements per block of :func:`_run` (its registers stay in cache)
+_BLOCK = 256
+
+
+@njit(cache=True, nogil=True)
+def _ops(code: NDArray[np.int64], r_lo: Array, r_hi: Array, n: int) -> None:  # pragma: no cover
+    """The tape's operations over the first ``n`` columns of the registers."""
+    for p in range(code.shape[0]):
+        op = code[p, 0]
+        t_lo = r_lo[code[p, 1]]
+        t_hi = r_hi[code[p, 1]]
+        a_lo = r_lo[code[p, 2]]
+        a_hi = r_hi[code[p, 2]]
+        b_lo = r_lo[code[p, 3]]
+        b_hi = r_hi[code[p, 3]]
+        if op == 0:
+            for e in range(n):
+                t_lo[e], t_hi[e] = interval_add(a_lo[e], a_hi[e], b_lo[e], b_hi[e])
+        elif op == 1:
+            for e in range(n):
+                t_lo[e], t_hi[e] = interval_sub(a_lo[e], a_hi[e], b_lo[e], b_hi[e])
+        elif op == 2:
+            for e in range(n):
+                t_lo[e], t_hi[e] = interval_mul(a_lo[e], a_hi[e], b_lo[e], b_hi[e])
+        elif op == 3:
+            for e in range(n):
+                x_lo = a_lo[e]
+                t_lo[e] = -a_hi[e]
+                t_hi[e] = -x_lo
+        else:
+            for e in range(n):
+                x_lo = a_lo[e]
+                x_hi = a_hi[e]
+                s_lo, s_hi = interval_mul(x_lo, x_hi, x_lo, x_hi)
+                t_lo[e] = 0.0 if (x_lo <= 0.0 and x_hi >= 0.0) else _max0(s_lo)
+                t_hi[e] = s_hi
+
+
+@njit(cache=True, nogil=True)
+def _run(
+    code: NDArray[np.int64],
+    const_lo: Array,
+    const_hi: Array,
+    k: int,
+    lo: Array,
+    hi: Array,
+    box: NDArray[np.int64],
+    q_lo: Array,
+    q_hi: Array,
+    extra_lo: Array,
+    extra_hi: Array,
+    slots: int,
+    out: int,
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """The tape over each element ``i``: pose box ``box[i]`` and joint ``q[i]``;
+    a block of elements at a time, one operation over the whole block."""
+    block = _BLOCK
+    r_lo = np.empty((slots, block))
+    r_hi = np.empty((slots, block))
+    n_extra = extra_lo.shape[0]
+    first_const = k + 1 + n_extra
+    for c in range(const_lo.size):
+        for e in range(block):
+            r_lo[first_const + c, e] = const_lo[c]
+            r_hi[first_const + c, e] = const_hi[c]
+    m = q_lo.size
+    for start in range(0, m, block):
+        n = min(block, m - start)
+        for e in range(n):
+            b = box[start + e]
+            for j in range(k):
+                r_lo[j, e] = lo[b, j]
+                r_hi[j, e] = hi[b, j]
+            r_lo[k, e] = q_lo[start + e]
+            r_hi[k, e] = q_hi[start + e]
+        for x in range(n_extra):
+            for e in range(n):
+                r_lo[k + 1 + x, e] = extra_lo[x, start + e]
+                r_hi[k + 1 + x, e] = extra_hi[x, start + e]
+        _ops(code, r_lo, r_hi, n)
+        for e in range(n):
+            out_lo[start + e] = r_lo[out, e]
+            out_hi[start + e] = r_hi[out, e]
+
+
+def _flat(x: Any, m: int) -> Array:
+    a = np.asarray(x, dtype=np.float64)
+    if a.shape == (m,) and a.flags.c_contiguous:
+        return a
+    return np.ascontiguousarray(np.broadcast_to(a, (m,)))
+
+
+def run(tape: Tape, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
+    """The tape's enclosure over the boxes ``[lo[box[i]], hi[box[i]]]`` (rows of
+    ``(n, k)`` arrays) and the joint enclosures ``q`` (shape ``(m,)``)."""
+    m = int(np.size(box))
+    box_i = np.asarray(box, dtype=np.int64)
+    if box_i.shape != (m,) or not box_i.flags.c_contiguous:
+        box_i = np.ascontiguousarray(np.broadcast_to(box_i, (m,)))
+    lo_c = np.ascontiguousarray(lo, dtype=np.float64)
+    hi_c = np.ascontiguousarray(hi, dtype=np.float64)
+    extra_lo = np.empty((len(tape.derived), m))
+    extra_hi = np.empty((len(tape.derived), m))
+    coords: list[Interval] | None = None
+    for e, (function, args) in enumerate(tape.derived):
+        values: list[Interval] = []
+        for a in args:
+            if a == tape.k:
+                values.append(q)
+            else:
+                if coords is None:
+                    coords = [Interval(lo_c[box_i, j], hi_c[box_i, j]) for j in range(tape.k)]
+                values.append(coords[a])
+        with np.errstate(all="ignore"):
+            v = function(*values)
+        if not isinstance(v, Interval):
+            v = Interval(v)
+        extra_lo[e] = v.lo  # a copy (broadcast where v is one interval)
+        extra_hi[e] = v.hi
+    out_lo = np.empty(m)
+    out_hi = np.empty(m)
+    _run(
+        tape.code,
+        tape.const_lo,
+        tape.const_hi,
+        tape.k,
+        lo_c,
+        hi_c,
+        box_i,
+        _flat(q.lo, m),
+        _flat(q.hi, m),
+        extra_lo,
+        extra_hi,
+        tape.slots,
+        tape.out,
+        out_lo,
+        out_hi,
+    )
+    return Interval(out_lo, out_hi)
+
+
+def trace_all(functions: Sequence[Callable[..., Any]], k: int) -> list[Tape | None]:
+    """:func:`trace` of each function, None where it is :class:`Untraceable`."""
+    out: list[Tape | None] = []
+    for f in functions:
+        try:
+            out.append(trace(f, k))
+        except Untraceable:
+            out.append(None)
+    return out
+
+
+# --------------------------------------------------------------- contraction
+_SIN, _COS = 0, 1
+
+
+def trig_kinds(tape: Tape) -> NDArray[np.int64] | None:
+    """Per derived input, 0 for ``sin(q)`` and 1 for ``cos(q)`` of the joint (the
+    functions of :mod:`~moveability.mechanisms.expressions`); None if the tape has
+    any other derived input (:func:`contract` then does not apply)."""
+    from . import expressions as ex
+
+    kinds = []
+    for function, args in tape.derived:
+        if args != (tape.k,):
+            return None
+        if function is ex.sin:
+            kinds.append(_SIN)
+        elif function is ex.cos:
+            kinds.append(_COS)
+        else:
+            return None
+    return np.array(kinds, dtype=np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _contract(
+    code: NDArray[np.int64],
+    const_lo: Array,
+    const_hi: Array,
+    k: int,
+    kinds: NDArray[np.int64],
+    slots: int,
+    out: int,
+    lo: Array,
+    hi: Array,
+    box: NDArray[np.int64],
+    sign: Array,
+    below_a: Array,
+    below_b: Array,
+    above_a: Array,
+    above_b: Array,
+    iterations: int,
+    rtol: float,
+) -> None:  # pragma: no cover - compiled
+    """The bisection of ``ConstraintLeg._contract`` on F's sign, every iteration
+    over the runs still active, the tape evaluated at ``[m, m]`` (its sines and
+    cosines by ``intervals.point_sin_cos``): the same steps on the same floats."""
+    block = _BLOCK
+    r_lo = np.empty((slots, block))
+    r_hi = np.empty((slots, block))
+    n_extra = kinds.size
+    first_const = k + 1 + n_extra
+    for c in range(const_lo.size):
+        for e in range(block):
+            r_lo[first_const + c, e] = const_lo[c]
+            r_hi[first_const + c, e] = const_hi[c]
+    n = box.size
+    active = np.arange(n)
+    count = n
+    # each block evaluates the points of half a block of runs: m1 then m2
+    half = block // 2
+    for _ in range(iterations):
+        kept = 0
+        for a in range(count):
+            i = active[a]
+            width = above_b[i] - below_a[i]
+            done = (below_b[i] - below_a[i] <= rtol * width) and (
+                above_b[i] - above_a[i] <= rtol * width
+            )
+            if not done:
+                active[kept] = i
+                kept += 1
+        count = kept
+        if count == 0:
+            break
+        for start in range(0, count, half):
+            m = min(half, count - start)
+            for e in range(2 * m):
+                i = active[start + (e % m)]
+                if e < m:
+                    point = 0.5 * (below_a[i] + below_b[i])
+                else:
+                    point = 0.5 * (above_a[i] + above_b[i])
+                b = box[i]
+                for j in range(k):
+                    r_lo[j, e] = lo[b, j]
+                    r_hi[j, e] = hi[b, j]
+                r_lo[k, e] = point
+                r_hi[k, e] = point
+                if n_extra:
+                    s_lo, s_hi, c_lo, c_hi = point_sin_cos(point)
+                    for x in range(n_extra):
+                        if kinds[x] == 0:
+                            r_lo[k + 1 + x, e] = s_lo
+                            r_hi[k + 1 + x, e] = s_hi
+                        else:
+                            r_lo[k + 1 + x, e] = c_lo
+                            r_hi[k + 1 + x, e] = c_hi
+            _ops(code, r_lo, r_hi, 2 * m)
+            for e in range(m):
+                i = active[start + e]
+                m1 = r_lo[k, e]
+                m2 = r_lo[k, m + e]
+                v1_lo = r_lo[out, e]
+                v1_hi = r_hi[out, e]
+                v2_lo = r_lo[out, m + e]
+                v2_hi = r_hi[out, m + e]
+                up = sign[i] > 0
+                neg = (v1_hi < 0) if up else (v1_lo > 0)
+                pos = (v2_lo > 0) if up else (v2_hi < 0)
+                if neg:
+                    below_a[i] = m1
+                else:
+                    below_b[i] = m1
+                if pos:
+                    above_b[i] = m2
+                else:
+                    above_a[i] = m2
+
+
+def contract(
+    tape: Tape,
+    kinds: NDArray[np.int64],
+    lo: Array,
+    hi: Array,
+    box: NDArray[np.intp],
+    sign: Array,
+    below: tuple[Array, Array],
+    above: tuple[Array, Array],
+    iterations: int,
+    rtol: float,
+) -> tuple[Array, Array]:
+    """``ConstraintLeg._contract`` compiled: the runs' brackets ``below`` (a point
+    certified below the root, one not) and ``above``, halved ``iterations`` times at
+    most; returns the lower and upper bounds. ``kinds`` from :func:`trig_kinds`."""
+    below_a, below_b = (np.array(v, dtype=np.float64) for v in below)
+    above_a, above_b = (np.array(v, dtype=np.float64) for v in above)
+    _contract(
+        tape.code,
+        tape.const_lo,
+        tape.const_hi,
+        tape.k,
+        kinds,
+        tape.slots,
+        tape.out,
+        np.ascontiguousarray(lo, dtype=np.float64),
+        np.ascontiguousarray(hi, dtype=np.float64),
+        np.ascontiguousarray(box, dtype=np.int64),
+        np.ascontiguousarray(sign, dtype=np.float64),
+        below_a,
+        below_b,
+        above_a,
+        above_b,
+        int(iterations),
+        float(rtol),
+    )
+    return below_a, above_b
