@@ -125,3 +125,29 @@ def test_compiled_contraction_matches_the_interpreted_one(seed: int, monkeypatch
         assert (compiled.status == 1).sum() > 50  # many regular boxes, contracted
         for a, b in zip(compiled.branches, plain.branches, strict=True):
             assert same(a, b)
+
+
+@pytest.mark.parametrize(
+    ("expr_of", "values"),
+    [
+        # the float a*b - c is 0 where the real one is about 1e-17
+        (lambda a, b, c: a * b - c, [1.947, 0.882, 1.947 * 0.882]),
+        (lambda a, b, c: a * b - c, [0.219, 0.148, 0.219 * 0.148]),
+        (lambda a, b, c: a**2 - b * c, [1.234, 2.345, 1.234 * 1.234 / 2.345]),
+    ],
+)
+def test_operations_among_parameters_are_rounded_outwards(expr_of, values) -> None:
+    """Operations among parameters alone give no float: the enclosure of ``x *
+    f(a, b, c)`` at x = 1, interpreted and compiled alike, holds the exact
+    value of the parameters' floats (compared as fractions)."""
+    from fractions import Fraction
+
+    x, q, a, b, c = sympy.symbols("x q a b c", real=True)
+    f = compile_expression(x * expr_of(a, b, c) + 0 * q, [x, q, a, b, c])
+    g = BoundExpression(f, values, 1)
+    exact = expr_of(*(Fraction(v) for v in values))
+    one = np.ones((1, 1))
+    at = np.zeros(1, dtype=np.int64)
+    q_box = Interval(np.zeros(1))
+    for value in (interpreted(g, one, one, at, q_box), tp.run(g.tape, one, one, at, q_box)):
+        assert Fraction(float(value.lo[0])) <= exact <= Fraction(float(value.hi[0]))

@@ -339,6 +339,12 @@ def compile_expression(
     return g
 
 
+def _exact(value: Any) -> Interval:
+    """A number (or an array of numbers) as a degenerate interval."""
+    v = np.asarray(value, dtype=np.float64)
+    return Interval(v, v)
+
+
 def _compile_body(body: str, n_args: int, key: str) -> Callable[..., Any]:
     """The function of ``_a0, ..., _a{n_args - 1}`` returning the printed ``body``
     (see :func:`compile_expression`)."""
@@ -355,7 +361,9 @@ def _compile_body(body: str, n_args: int, key: str) -> Callable[..., Any]:
 
     def g(*values: Any) -> Any:
         if ex.is_interval(*values):
-            return g_interval(*values)
+            # numbers (the parameters) as degenerate intervals: an operation among
+            # them (L1*L2, L2**2) is then rounded outwards too
+            return g_interval(*(v if isinstance(v, Interval) else _exact(v) for v in values))
         with np.errstate(all="ignore"):
             return g_float(*values)
 
@@ -396,7 +404,9 @@ class BoundExpression:
             tape = None
             if traceable is not None:
                 try:
-                    tape = tp.trace(lambda *xs: traceable(*xs, *self.values), self.k)
+                    # the parameters as the interpreted path takes them (see _compile_body)
+                    values = [tp.constant(_exact)(v) for v in self.values]
+                    tape = tp.trace(lambda *xs: traceable(*xs, *values), self.k)
                 except tp.Untraceable:
                     tape = None
             self._tape = tape
