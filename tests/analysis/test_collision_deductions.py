@@ -19,7 +19,7 @@ from constraint_references import _cross2, constrained
 from moveability import from_spec
 from moveability.intervals import Interval
 from moveability.limits import INSIDE
-from moveability.mechanisms.base import REGULAR
+from posture_boxes import posture_enclosures
 
 DESIGNS = [
     # Caro et al.'s five-bar and its mirror, and one with equal links
@@ -98,22 +98,6 @@ def _boxes(lengths, rng, n):
     return centres - half, centres + half
 
 
-def _enclosures(mechanism, lo, hi, posture):
-    angles, regular = [], []
-    for leg, branch in zip(mechanism.legs, mechanism.postures[posture], strict=True):
-        reach = leg.reach(lo, hi)
-        ok = reach.status == REGULAR
-        fold = reach.hull
-        angles.append(
-            Interval(
-                np.where(ok, reach.branches[branch].lo, fold.lo),
-                np.where(ok, reach.branches[branch].hi, fold.hi),
-            )
-        )
-        regular.append(ok)
-    return angles, np.stack(regular, axis=1)
-
-
 def _samples(mechanism, lengths, lo, hi, posture, rng, m):
     """Configurations of a posture at poses sampled in one box: points, det A."""
     pose = lo + rng.random((m, 2)) * (hi - lo)
@@ -138,7 +122,7 @@ def test_void_boxes_hold_no_configuration_apart(lengths):
     lo, hi = _boxes(lengths, rng, 600)
     claimed = 0
     for posture in range(len(mechanism.postures)):
-        angles, regular = _enclosures(mechanism, lo, hi, posture)
+        angles, regular = posture_enclosures(mechanism, lo, hi, posture)
         margins = mechanism.constraint_margins(lo, hi, angles, posture, regular)
         for sign in (1, -1):
             for box in np.flatnonzero(margins.void(sign)):
@@ -160,7 +144,7 @@ def test_kept_motions_keep_the_links_apart(lengths):
     lo, hi = _boxes(lengths, rng, 600)
     checked = 0
     for posture in range(len(mechanism.postures)):
-        angles, regular = _enclosures(mechanism, lo, hi, posture)
+        angles, regular = posture_enclosures(mechanism, lo, hi, posture)
         both = regular.all(axis=1)
         b_lo, b_hi = lo[both], hi[both]
         angles = [Interval(a.lo[both], a.hi[both]) for a in angles]

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from moveability import from_spec
-from moveability.intervals import Interval
-from moveability.mechanisms.base import REGULAR
+from posture_boxes import posture_enclosures
 
 
 def _five_bar(lengths):
@@ -20,20 +19,6 @@ def _five_bar(lengths):
             "limits": {"theta1": "unlimited", "theta2": "unlimited"},
         }
     )
-
-
-def _enclosures(mechanism, lo, hi, posture):
-    angles = []
-    for leg, branch in zip(mechanism.legs, mechanism.postures[posture], strict=True):
-        reach = leg.reach(lo, hi)
-        ok = reach.status == REGULAR
-        angles.append(
-            Interval(
-                np.where(ok, reach.branches[branch].lo, reach.hull.lo),
-                np.where(ok, reach.branches[branch].hi, reach.hull.hi),
-            )
-        )
-    return angles
 
 
 @pytest.mark.parametrize(
@@ -61,7 +46,7 @@ def test_det_enclosure_holds_near_the_folds(lengths):
     lo, hi = centres - half, centres + half
     held = narrower = 0
     for posture, branches in enumerate(mechanism.postures):
-        angles = _enclosures(mechanism, lo, hi, posture)
+        angles, _ = posture_enclosures(mechanism, lo, hi, posture)
         sharp = mechanism.det_a_boxes(lo, hi, angles, posture=posture)
         natural = mechanism.det_a_boxes(lo, hi, angles)
         assert (sharp.lo >= natural.lo).all() and (sharp.hi <= natural.hi).all()

@@ -707,10 +707,16 @@ class ConstraintMargins:
                 turn[a, b, c] = (up, down) if flip > 0 else (down, up)
         pts = self._points
 
+        dots: dict[tuple[str, str, str], tuple[NDArray[np.bool_], ...]] = {}
+
         def dot(p: str, q: str, o: str) -> tuple[NDArray[np.bool_], ...]:
-            u, v = _minus(pts[p], pts[o]), _minus(pts[q], pts[o])
-            value = u[0] * v[0] + u[1] * v[1]
-            return value.lo > 0, value.hi < 0, value.lo >= 0, value.hi <= 0
+            """The sign classes of ``(p - o) . (q - o)``: > 0, < 0, >= 0, <= 0."""
+            key = (min(p, q), max(p, q), o)
+            if key not in dots:
+                u, v = _minus(pts[p], pts[o]), _minus(pts[q], pts[o])
+                value = u[0] * v[0] + u[1] * v[1]
+                dots[key] = (value.lo > 0, value.hi < 0, value.lo >= 0, value.hi <= 0)
+            return dots[key]
 
         with np.errstate(invalid="ignore", over="ignore"):
             for x in names:

@@ -15,7 +15,7 @@ from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
 from ..types import Array
-from .base import Mechanism
+from .base import Mechanism, interval_det
 from .constraints import Linkage, Turning, fixed_point
 from .rr_leg import RRLeg
 
@@ -127,16 +127,16 @@ class FiveBar(Mechanism):
         posture, intersected with one form per leg in which its branch appears
         as a sign (:func:`branch_det`): sharp where a leg folds, where the
         elbow's angle enclosure is wide but its side is not."""
-        natural = super().det_a_boxes(lo, hi, angles)
+        # the elbows once: the rows P - C, P - D (as each leg's a_row_boxes) and the forms
+        knees = [leg.knee_boxes(angles[i])[0] for i, leg in enumerate(self.rr_legs)]
+        pose = [Interval(lo[:, 0], hi[:, 0]), Interval(lo[:, 1], hi[:, 1])]
+        out = interval_det([[pose[0] - knee[0], pose[1] - knee[1]] for knee in knees])
         if posture is None:
-            return natural
+            return out
         branches = self.postures[posture]
-        points = [leg.knee_boxes(angles[i])[0] for i, leg in enumerate(self.rr_legs)]
-        out = natural
-        for i, (leg, other) in enumerate(((0, 1), (1, 0))):
-            form = branch_det(self.rr_legs[leg], int(branches[leg]), lo, hi, points[other])
-            if i == 1:
-                form = -form  # det A = -(P - D) x (P - C)
+        for leg, other, sign in ((0, 1, 1.0), (1, 0, -1.0)):
+            # det A = (P - C) x (P - D) = -(P - D) x (P - C)
+            form = branch_det(self.rr_legs[leg], int(branches[leg]), lo, hi, knees[other]) * sign
             with np.errstate(invalid="ignore"):
                 lo_, hi_ = np.maximum(out.lo, form.lo), np.minimum(out.hi, form.hi)
                 # NaN bounds leave the other enclosure; an empty meet (no
