@@ -60,6 +60,9 @@ RPR = EXAMPLES / "three-rpr.toml"
 MOVEABILITY = str(Path(sys.executable).parent / "moveability")
 #: grid components below this share of W's measure are counted apart as grid noise
 TINY = 1e-4
+#: a process that starts numba and calls one cached kernel of the package, as
+#: every analysis does before its first leaf
+NUMBA_FLOOR = "from moveability.intervals import next_below; next_below(1.0)"
 
 
 # ------------------------------------------------------------- numpy grids
@@ -429,6 +432,23 @@ def case_five_bar(eps: float) -> None:
     print(indent(timing_rows(rows)))
     print(ratio_line("regions / numpy (processes)", cert["wall"], grid["wall"], 0.5))
     print(agreement(cert, grid, "area"))
+    # what every run pays before its first leaf: the compiled kernels' runtime
+    # (numba's import and the first call of one cached kernel) and a whole
+    # process at a precision of a few leaves
+    floor = best_of([sys.executable, "-c", NUMBA_FLOOR], 3)
+    coarse = regions_process(PAPER, "0.5")
+    budget = 0.5 * grid["wall"]
+    print("  fixed costs (best of 3 / one run):")
+    rows = [
+        ("numpy + numba + one cached kernel", floor[0], None, floor[1]),
+        (f"moveability regions -p 0.5 ({coarse['leaves']} leaves)", coarse["wall"], None,
+         coarse["rss_mib"]),
+    ]  # fmt: skip
+    print(indent(timing_rows(rows)))
+    print(
+        f"  the target allows {budget:.2f} s for the whole process: "
+        f"{floor[0] / budget:.1f} times that goes to starting numba alone"
+    )
     print()
 
 

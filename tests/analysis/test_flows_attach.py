@@ -108,3 +108,60 @@ def test_face_sides_and_attachment_match_references(seed: int) -> None:
         want = reference_attached(done, nodes, bits, exists, faces, neighbours, full)
         assert np.array_equal(got, want)
         assert want.any() and (~want & ~done).any()  # neither trivial
+
+
+# ------------------------------------------------------------- axis flows first
+@pytest.mark.parametrize(
+    ("spec", "precision"),
+    [
+        ("five-bar-paper.toml", 0.1),
+        ("five-bar-full-turn.toml", 0.1),
+        ("three-rpr.toml", [1.0, 1.0, 0.2]),
+    ],
+)
+def test_axis_flows_first_attach_exactly_what_every_flow_attaches(spec, precision):
+    """The analysis tries the flows along the pose axes on every node and the others
+    only on the nodes left open: its open nodes, and those of a region attached
+    alone (``_held_by``), are those that every flow on every node gives."""
+    from pathlib import Path
+
+    from moveability import analyze, load_spec
+    from moveability.analysis.flows import dead_or_certified, flow_conditions
+
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    result = analyze(load_spec(examples / spec), precision=precision, resolve=False)
+    table, leaves = result.table, result.tree.leaves()
+    nodes = result._flows[0]
+    # the second pass ran, on some nodes and not all
+    complete = result._complete_flows
+    assert 0 < int(complete.sum()) < complete.size
+    bits, exists, faces = flow_conditions(result.mechanism, leaves.lo, leaves.hi, table, nodes)
+    axes, _, _ = flow_conditions(
+        result.mechanism, leaves.lo, leaves.hi, table, nodes, axes_only=True
+    )
+    # the axis flows are the first bits of every flow's
+    n_axes = 2 * leaves.lo.shape[1]
+    first = np.uint64((1 << n_axes) - 1)
+    assert np.array_equal(axes, bits & first)
+    assert not (axes & ~first).any()
+    gained = 0
+    for row, s in enumerate((1, -1)):
+        done = dead_or_certified(table, s)
+        every = attached_nodes(
+            done, nodes, bits[row], exists, faces, result._neighbours, result._spans
+        )
+        assert np.array_equal(result.open_nodes[row], ~done & ~every)
+        alone = attached_nodes(
+            done, nodes, axes[row], exists, faces, result._neighbours, result._spans
+        )
+        assert not (alone & ~every).any()
+        gained += int((every & ~alone).sum())
+    # axis flows alone leave more open: the second pass is not idle
+    assert gained > 0
+    # the nodes completed keep their flows: equal to every flow's
+    at = np.flatnonzero(complete)
+    assert np.array_equal(result._flows[1][:, at], bits[:, at])
+    # a saved analysis holds every flow of every node
+    evidence = result.evidence()
+    assert result._complete_flows.all()
+    assert np.array_equal(evidence.flows[1], bits)

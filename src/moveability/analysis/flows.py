@@ -51,6 +51,7 @@ from .regions import split_legs
 from .sheets import SheetTable
 
 __all__ = [
+    "Attachment",
     "FaceNeighbours",
     "attached_nodes",
     "dead_or_certified",
@@ -323,6 +324,7 @@ def flow_conditions(
     hi: Array,
     table: SheetTable,
     nodes: NDArray[np.intp],
+    axes_only: bool = False,
 ) -> tuple[NDArray[np.uint64], NDArray[np.bool_], NDArray[np.uint8]]:
     """Where the pieces of some nodes flow.
 
@@ -341,6 +343,12 @@ def flow_conditions(
     their unit normals at the leaf's centre (det A of the sign, joints away from
     the stops inside the slot), checked over the whole leaf like the others.
     It settles corners where two constraint curves cross at a sharp angle.
+
+    With ``axes_only`` only the flows along the ``2 k`` pose axes are tried (the
+    first ``2 k`` bits; the others are left clear): most nodes attach along an
+    axis, and :func:`attached_nodes` is monotone in the flows, so the caller may
+    try the rest on the nodes left open alone and attach exactly the nodes that
+    every flow would.
 
     Returns
     -------
@@ -363,7 +371,7 @@ def flow_conditions(
         at = np.flatnonzero(nodes[:, 1] == p)
         if not at.size:
             continue
-        flows, ex, fc = _posture_flows(mechanism, lo, hi, table, nodes[at, 0], p)
+        flows, ex, fc = _posture_flows(mechanism, lo, hi, table, nodes[at, 0], p, axes_only)
         weights = np.left_shift(np.uint64(1), np.arange(flows.shape[-1], dtype=np.uint64))
         bits[:, at] = (flows.astype(np.uint64) * weights).sum(axis=-1, dtype=np.uint64)
         exists[at] = ex
@@ -378,9 +386,11 @@ def _posture_flows(
     table: SheetTable,
     rows: NDArray[np.intp],
     p: int,
+    axes_only: bool = False,
 ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.uint8]]:
     """The flows of the nodes of posture ``p`` over leaves ``rows``:
-    ``(flows (2, n, slots, F), exists (n, slots), faces (F, n))``."""
+    ``(flows (2, n, slots, F), exists (n, slots), faces (F, n))``; with
+    ``axes_only`` the flows along the pose axes alone (the others clear)."""
     n_legs = len(mechanism.legs)
     split = split_legs(mechanism.limits)
     slots = 1 << len(split)
@@ -395,6 +405,9 @@ def _posture_flows(
     flows = np.zeros((2, rows.size, slots, n_flows), dtype=bool)
     exists = np.zeros((rows.size, slots), dtype=bool)
     faces = np.zeros((n_flows, rows.size), dtype=np.uint8)
+    if axes_only:
+        # the first fields are the axis directions (see flow_directions)
+        fields = fields[: 2 * lo.shape[1]]
     for ff, field in enumerate(fields):
         faces[ff] = field.faces
     if not rows.size:
@@ -488,6 +501,8 @@ def _posture_flows(
                 if det_rate is not None:
                     steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
                 flows[row, :, c, ff] = slot_ok & steady & kept[row]
+    if axes_only:
+        return flows, exists, faces
     # the constraints that may be active near the leaf (within _NEAR of its size):
     # the leaves around one corner then share the direction into it
     det = Interval(table.det_lo[rows, p], table.det_hi[rows, p])
@@ -933,51 +948,80 @@ def attached_nodes(
     -----
     A slot attaches along one of its flows once every slot across that flow's
     exit faces that it may land in is done. Linear in the number of (slot,
-    flow, slot across) triples.
+    flow, slot across) triples. :class:`Attachment` does the same and may be
+    resumed with more flows.
     """
-    n, n_post = done.shape
-    m = nodes.shape[0]
-    slots = exists.shape[1]
-    n_faces = neighbours.open.shape[1]
-    leaf, post = nodes[:, 0].astype(np.int64), nodes[:, 1].astype(np.int64)
-    node_row = np.full((n, n_post), -1, dtype=np.int64)
-    node_row[leaf, post] = np.arange(m)
-    slot_done = np.ascontiguousarray(~exists | done[leaf, post][:, None])
-    if neighbours.flat is not None:
-        all_pairs, face_ptr = neighbours.flat
-    else:
-        face_ptr = np.zeros(n_faces + 1, dtype=np.int64)
-        face_ptr[1:] = np.cumsum([neighbours.pairs[f].shape[0] for f in range(n_faces)])
-        all_pairs = (
-            np.concatenate([neighbours.pairs[f].reshape(-1, 2) for f in range(n_faces)])
-            if n_faces
-            else np.zeros((0, 2), dtype=np.int64)
+    return Attachment(done, nodes, exists, neighbours, spans).run(bits, faces)
+
+
+class Attachment:
+    """The attachment of nodes for one sign (see :func:`attached_nodes`), resumable.
+
+    Built once from what does not depend on the flows (the slots each one waits
+    on); :meth:`run` attaches with the flows given and keeps its state, so that
+    a later run with more flows (bits only added, exit faces given for the flows
+    added) continues from the slots already attached: attachment is monotone in
+    the flows, and the result is that of the last flows given.
+    """
+
+    def __init__(
+        self,
+        done: NDArray[np.bool_],
+        nodes: NDArray[np.intp],
+        exists: NDArray[np.bool_],
+        neighbours: FaceNeighbours,
+        spans: NDArray[np.float64] | None = None,
+    ) -> None:
+        n, n_post = done.shape
+        m = nodes.shape[0]
+        slots = exists.shape[1]
+        n_faces = neighbours.open.shape[1]
+        leaf, post = nodes[:, 0].astype(np.int64), nodes[:, 1].astype(np.int64)
+        node_row = np.full((n, n_post), -1, dtype=np.int64)
+        node_row[leaf, post] = np.arange(m)
+        slot_done = np.ascontiguousarray(~exists | done[leaf, post][:, None])
+        if neighbours.flat is not None:
+            all_pairs, face_ptr = neighbours.flat
+        else:
+            face_ptr = np.zeros(n_faces + 1, dtype=np.int64)
+            face_ptr[1:] = np.cumsum([neighbours.pairs[f].shape[0] for f in range(n_faces)])
+            all_pairs = (
+                np.concatenate([neighbours.pairs[f].reshape(-1, 2) for f in range(n_faces)])
+                if n_faces
+                else np.zeros((0, 2), dtype=np.int64)
+            )
+        if spans is None:
+            spans = np.zeros((m, slots, 0, 2))
+        self._done, self._leaf, self._post = done, leaf, post
+        self._slot_done = slot_done
+        self._waiting = _dependencies(
+            np.ascontiguousarray(all_pairs, dtype=np.int64),
+            face_ptr,
+            node_row,
+            np.ascontiguousarray(done),
+            slot_done,
+            np.ascontiguousarray(spans, dtype=np.float64),
+            np.ascontiguousarray(neighbours.open[leaf]),
         )
-    if spans is None:
-        spans = np.zeros((m, slots, 0, 2))
-    per_face, never, dep_ptr, dep_row, dep_slot, dep_face = _dependencies(
-        np.ascontiguousarray(all_pairs, dtype=np.int64),
-        face_ptr,
-        node_row,
-        np.ascontiguousarray(done),
-        slot_done,
-        np.ascontiguousarray(spans, dtype=np.float64),
-        np.ascontiguousarray(neighbours.open[leaf]),
-    )
-    _propagate(
-        slot_done,
-        np.ascontiguousarray(bits),
-        per_face,
-        never,
-        np.ascontiguousarray(faces),
-        dep_ptr,
-        dep_row,
-        dep_slot,
-        dep_face,
-    )
-    state = done.copy()
-    state[leaf, post] |= slot_done.all(axis=1)
-    return state & ~done
+
+    def run(self, bits: NDArray[np.uint64], faces: NDArray[np.uint8]) -> NDArray[np.bool_]:
+        """The nodes attached with the flows ``bits`` (m, slots) and their exit
+        ``faces`` (F, m), beyond ``done``: (n, P) bool."""
+        per_face, never, dep_ptr, dep_row, dep_slot, dep_face = self._waiting
+        _propagate(
+            self._slot_done,
+            np.ascontiguousarray(bits),
+            per_face,
+            never,
+            np.ascontiguousarray(faces),
+            dep_ptr,
+            dep_row,
+            dep_slot,
+            dep_face,
+        )
+        state = self._done.copy()
+        state[self._leaf, self._post] |= self._slot_done.all(axis=1)
+        return state & ~self._done
 
 
 def dead_or_certified(table: SheetTable, s: int, cross_serial: bool = True) -> NDArray[np.bool_]:

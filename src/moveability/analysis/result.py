@@ -30,7 +30,7 @@ from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, 
 from ..spec import describe_spec
 from ..types import NO, UNKNOWN, YES, answer, word
 from .flows import (
-    attached_nodes,
+    Attachment,
     dead_or_certified,
     face_neighbours,
     flow_conditions,
@@ -669,7 +669,7 @@ class Analysis:
         )
         self._attach(
             leaves,
-            None if flows_of is None else (flows_of[0]._flows, flows_of[1]),
+            None if flows_of is None else (flows_of[0], flows_of[1]),
             None if evidence is None else evidence.flows,
         )
         self._resolve()
@@ -677,6 +677,9 @@ class Analysis:
     def evidence(self) -> Evidence:
         """What the analysis proved beyond its tree and sheet table (see
         :class:`Evidence`), to be saved with them."""
+        # every flow of every node: a loaded analysis then tries none
+        if not self._complete_flows.all():
+            self._complete(~self._complete_flows)
         return Evidence(self._pairs, self._face_pairs, self._contact, self._flows[:4])
 
     @property
@@ -704,32 +707,40 @@ class Analysis:
     def _attach(
         self,
         leaves: Any,
-        reuse: tuple[Any, NDArray[np.intp]] | None = None,
+        reuse: tuple[Analysis, NDArray[np.intp]] | None = None,
         saved: tuple[NDArray[Any], ...] | None = None,
     ) -> None:
         """Nodes whose every valid configuration joins a certified sheet (see
         :mod:`moveability.analysis.flows`); the others, alive and uncertified, are *open*:
-        a region might hide there. ``reuse`` carries the flows of an analysis
-        this one refines, with the old index of each leaf (-1 for new ones);
-        ``saved`` the flows (nodes, bits, exists, faces) of a saved analysis of
-        this tree; ``leaves`` are the tree's leaves."""
+        a region might hide there. ``reuse`` carries the analysis this one
+        refines, with the old index of each leaf (-1 for new ones); ``saved``
+        the flows (nodes, bits, exists, faces) of a saved analysis of this
+        tree; ``leaves`` are the tree's leaves.
+
+        The flows along the pose axes are tried first, on every node; the other
+        flows only on the nodes those leave open (see :meth:`_attached`)."""
         t = self.table
         cross = not self.generalized_aspects
         done = [dead_or_certified(t, s, cross) for s in (1, -1)]
         nodes = np.argwhere(~done[0] | ~done[1])
         n, n_post = t.status.shape
+        m = nodes.shape[0]
         if saved is not None:
             saved_nodes, bits, exists, faces = saved
             if not np.array_equal(saved_nodes, nodes):
                 raise InvalidParameterError(
                     "path", "a saved analysis whose flows match its sheets", "a mismatch"
                 )
+            # a saved analysis holds every flow of every node (see evidence)
+            complete = np.ones(m, dtype=bool)
         elif reuse is None:
             bits, exists, faces = flow_conditions(
-                self.mechanism, leaves.lo, leaves.hi, t, nodes
+                self.mechanism, leaves.lo, leaves.hi, t, nodes, axes_only=True
             )
+            complete = np.zeros(m, dtype=bool)
         else:
-            (old_nodes, old_bits, old_exists, old_faces, old_n), old_index = reuse
+            old, old_index = reuse
+            old_nodes, old_bits, old_exists, old_faces, old_n = old._flows
             old_row = np.full((old_n, n_post), -1, dtype=np.int64)
             old_row[old_nodes[:, 0], old_nodes[:, 1]] = np.arange(old_nodes.shape[0])
             source = np.where(
@@ -739,29 +750,84 @@ class Analysis:
             )
             fresh = np.flatnonzero(source < 0)
             new_bits, new_exists, new_faces = flow_conditions(
-                self.mechanism, leaves.lo, leaves.hi, t, nodes[fresh]
+                self.mechanism, leaves.lo, leaves.hi, t, nodes[fresh], axes_only=True
             )
             kept = source >= 0
-            bits = np.zeros((2, nodes.shape[0], old_bits.shape[2]), dtype=np.uint64)
-            exists = np.zeros((nodes.shape[0], old_exists.shape[1]), dtype=bool)
-            faces = np.zeros((old_faces.shape[0], nodes.shape[0]), dtype=np.uint8)
+            bits = np.zeros((2, m, old_bits.shape[2]), dtype=np.uint64)
+            exists = np.zeros((m, old_exists.shape[1]), dtype=bool)
+            faces = np.zeros((old_faces.shape[0], m), dtype=np.uint8)
+            complete = np.zeros(m, dtype=bool)
             bits[:, kept], exists[kept], faces[:, kept] = (
                 old_bits[:, source[kept]],
                 old_exists[source[kept]],
                 old_faces[:, source[kept]],
             )
+            complete[kept] = old._complete_flows[source[kept]]
             bits[:, fresh], exists[fresh], faces[:, fresh] = new_bits, new_exists, new_faces
-        self._flows = (nodes, bits, exists, faces, n)
         self._spans = slot_spans(t, nodes, self.mechanism.limits)
-        neighbours = face_neighbours(self.tree, self._face_pairs)
-        self._neighbours = neighbours
+        self._neighbours = face_neighbours(self.tree, self._face_pairs)
+        if not supports_flows(self.mechanism):
+            complete[:] = True  # no flow to try
+        self._flows: tuple[Any, ...] = (nodes, bits, exists, faces, n)
+        #: per node of the flows: whether every flow was tried on it
+        self._complete_flows: NDArray[np.bool_] = complete
+        attached = self._attached(done, (0, 1), leaves=leaves)
         #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1)
         self.open_nodes = np.zeros((2, n, n_post), dtype=bool)
         for row in (0, 1):
-            attached = attached_nodes(
-                done[row], nodes, bits[row], exists, faces, neighbours, self._spans
-            )
-            self.open_nodes[row] = ~done[row] & ~attached
+            self.open_nodes[row] = ~done[row] & ~attached[row]
+
+    def _left_open(
+        self, done: list[NDArray[np.bool_]], attached: list[NDArray[np.bool_]]
+    ) -> NDArray[np.bool_]:
+        """Per node of the flows: neither done nor attached for some sign row."""
+        nodes = self._flows[0]
+        leaf, post = nodes[:, 0], nodes[:, 1]
+        out = np.zeros(nodes.shape[0], dtype=bool)
+        for d, a in zip(done, attached, strict=True):
+            out |= ~d[leaf, post] & ~a[leaf, post]
+        return out
+
+    def _attached(
+        self,
+        done: list[NDArray[np.bool_]],
+        rows: tuple[int, ...],
+        leaves: Any = None,
+    ) -> list[NDArray[np.bool_]]:
+        """:func:`~moveability.analysis.flows.attached_nodes` for each sign row of
+        ``rows`` (``done[i]`` for ``rows[i]``), with the flows of the nodes.
+
+        Nodes may hold the flows along the pose axes alone: those left open are
+        given the others (kept for later calls, :meth:`_complete`) and the
+        attachment goes on with them.
+        Attachment is monotone in the flows: a node attached with fewer flows is
+        attached with more, and every node that all the flows attach attaches
+        in the second pass (every node open after the first has them all), so
+        the result is exactly that of all the flows."""
+        nodes, bits, exists, faces, _ = self._flows
+        runs = [
+            Attachment(d, nodes, exists, self._neighbours, self._spans) for d in done
+        ]
+        attached = [a.run(bits[row], faces) for a, row in zip(runs, rows, strict=True)]
+        missing = self._left_open(done, attached) & ~self._complete_flows
+        if not missing.any():
+            return attached
+        self._complete(missing, leaves)
+        # the runs go on from the slots they attached, with the flows added
+        return [a.run(bits[row], faces) for a, row in zip(runs, rows, strict=True)]
+
+    def _complete(self, missing: NDArray[np.bool_], leaves: Any = None) -> None:
+        """Every flow tried on the nodes of the flows where ``missing`` holds: their
+        bits and exit faces replaced in place (kept for later calls)."""
+        nodes, bits, _, faces, _ = self._flows
+        at = np.flatnonzero(missing)
+        if leaves is None:
+            leaves = self.tree.leaves()
+        more_bits, _, more_faces = flow_conditions(
+            self.mechanism, leaves.lo, leaves.hi, self.table, nodes[at]
+        )
+        bits[:, at], faces[:, at] = more_bits, more_faces
+        self._complete_flows[at] = True
 
     def open_leaves(self, slack: int = 2) -> NDArray[np.bool_]:
         """Leaves that keep the count of regions open.
@@ -921,10 +987,7 @@ class Analysis:
         group = t.group if cross else np.zeros_like(t.group)
         in_c = (g.certain == c) & ((t.status == IN) | group)
         done = in_c | ~t.may_hold(s)
-        nodes, bits, exists, faces, _ = self._flows
-        attached = attached_nodes(
-            done, nodes, bits[row], exists, faces, self._neighbours, self._spans
-        )
+        (attached,) = self._attached([done], (row,))
         ok = (done | attached) & ~t.may_hold(-s) & ~(t.singular & (t.status != OUT))
         spans = (in_c | attached) & self._spanning & (t.sign == s)
         return np.asarray(leaves & (ok.all(axis=1) | spans.any(axis=1)), dtype=bool)
