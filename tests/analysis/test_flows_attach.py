@@ -165,3 +165,15 @@ def test_axis_flows_first_attach_exactly_what_every_flow_attaches(spec, precisio
     evidence = result.evidence()
     assert result._complete_flows.all()
     assert np.array_equal(evidence.flows[1], bits)
+
+
+@pytest.mark.parametrize("n_flags", [1, 7, 8, 9, 26, 63, 64])
+def test_pack_bits_against_sums_of_powers_of_two(n_flags):
+    from moveability.analysis.flows import _pack_bits
+
+    rng = np.random.default_rng(n_flags)
+    flags = rng.random((2, 50, 3, n_flags)) < 0.5
+    weights = np.left_shift(np.uint64(1), np.arange(n_flags, dtype=np.uint64))
+    expected = (flags.astype(np.uint64) * weights).sum(axis=-1, dtype=np.uint64)
+    packed = _pack_bits(flags)
+    assert packed.dtype == np.uint64 and np.array_equal(packed, expected)

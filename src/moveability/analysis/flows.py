@@ -372,11 +372,28 @@ def flow_conditions(
         if not at.size:
             continue
         flows, ex, fc = _posture_flows(mechanism, lo, hi, table, nodes[at, 0], p, axes_only)
-        weights = np.left_shift(np.uint64(1), np.arange(flows.shape[-1], dtype=np.uint64))
-        bits[:, at] = (flows.astype(np.uint64) * weights).sum(axis=-1, dtype=np.uint64)
+        bits[:, at] = _pack_bits(flows)
         exists[at] = ex
         faces[:, at] = fc
     return bits, exists, faces
+
+
+def _pack_bits(flags: NDArray[np.bool_]) -> NDArray[np.uint64]:
+    """The flags along the last axis (at most 64) as the bits of one integer, the
+    first flag in bit 0.
+
+    Examples
+    --------
+    >>> _pack_bits(np.array([[True, False, True], [False, True, False]])).tolist()
+    [5, 2]
+    """
+    if flags.shape[-1] > 64:
+        raise ValueError("at most 64 flags per integer")
+    packed = np.packbits(flags, axis=-1, bitorder="little")
+    wide = np.zeros((*packed.shape[:-1], 8), dtype=np.uint8)
+    wide[..., : packed.shape[-1]] = packed
+    # the eight bytes of each integer, lowest first
+    return wide.view("<u8")[..., 0].astype(np.uint64)
 
 
 def _posture_flows(
