@@ -361,7 +361,9 @@ class Interval:
     def __init__(self, lo: ArrayLike, hi: ArrayLike | None = None) -> None:
         lo_a = np.asarray(lo, dtype=np.float64)
         hi_a = lo_a if hi is None else np.asarray(hi, dtype=np.float64)
-        lo_a, hi_a = np.broadcast_arrays(lo_a, hi_a)
+        if lo_a.shape != hi_a.shape:
+            # (numpy returns arrays of one shape as they are)
+            lo_a, hi_a = np.broadcast_arrays(lo_a, hi_a)
         object.__setattr__(self, "lo", lo_a)
         object.__setattr__(self, "hi", hi_a)
 
