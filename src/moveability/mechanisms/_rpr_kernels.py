@@ -1,19 +1,21 @@
-"""Compiled interval enclosures of the 3-RPR, one loop over the boxes.
+"""Compiled interval enclosures of the 3-RPR: det A, the rows of A and their
+partials, the legs' lengths and joint gradients over boxes of poses.
 
-Each kernel computes, box by box, what :class:`~.three_rpr.ThreeRPR` and
+Each kernel computes what :class:`~.three_rpr.ThreeRPR` and
 :class:`~.three_rpr.RPRLeg` compute with :class:`~moveability.intervals.Interval`
-operations over whole arrays: the same operations on the same operands in the
-same order, each rounded outwards by the scalar primitives of
-:mod:`moveability.intervals` that the array operations apply element by element
-(:func:`~moveability.intervals.interval_mul`, ``interval_add``,
-``interval_sub``, ``_below`` / ``_above`` and the steps of ``_trig_bounds``).
-The bounds are thus the same, bit for bit
-(tests/mechanisms/test_three_rpr_kernels.py compares them on random boxes),
-without an array allocated per operation.
+operations: the same operations on the same operands in the same order, each
+rounded outwards by the compiled primitives of :mod:`moveability.intervals`
+that the Interval operators apply element by element (``mul_into``,
+``add_into``, ``sub_into``, ``interval_mul``, ``interval_sub``, ``_below`` /
+``_above``, ``point_sin_cos`` and the steps of ``_trig_bounds``). The bounds are
+thus the same floats, bit for bit (tests/mechanisms/test_three_rpr_kernels.py
+compares them on random boxes of every kind), computed chunk by chunk in
+scratch that stays in cache, with no array allocated per operation and no
+Python between the operations.
 
-The legs' geometry enters as two (3, 2) arrays: the base joints ``A_i`` and
-the platform joints ``b_i`` in the platform frame. Boxes of poses are (n, 3)
-arrays ``lo``, ``hi`` of ``(x, y, phi)``.
+A leg enters as ``(A_x, A_y, b_x, b_y)``: its base joint and its platform joint
+in the platform frame. Boxes of poses are (n, 3) C-contiguous arrays ``lo``,
+``hi`` of ``(x, y, phi)``.
 """
 
 from __future__ import annotations
@@ -42,7 +44,8 @@ from ..types import Array
 
 __all__ = ["det_a_bounds", "joint_gradient_bounds", "reach_bounds", "row_bounds"]
 
-#: a slot number: the kernels pass them as np.int64 (see det_a_bounds)
+#: a slot (a row of the scratch, see below); the kernels pass them as np.int64: a
+#: constant would have numba compile each helper once for each slot number
 Slot = int | np.int64
 
 #: the entries of one leg in :func:`row_bounds`: the row (dx, dy, turn), then
@@ -159,6 +162,10 @@ def _load(
         lo[c + 1, j], hi[c + 1, j] = _trig_range(a, b, True)
 
 
+#: the ``partials`` of :func:`_leg`: none; none and no turn either
+_NONE, _TARGET = -1, -2
+
+
 @njit(cache=True, nogil=True)
 def _leg(
     lo: Array,
@@ -176,7 +183,8 @@ def _leg(
     and the cosine and sine of phi in ``c, c + 1``, with ``ab`` = (A_x, A_y,
     b_x, b_y): the row ``dx, dy, rbx py - rby px`` into slots ``row .. row + 2``;
     when ``partials >= 0``, ``-rby, rbx, -(rbx px + rby py)`` into ``partials ..
-    partials + 2``. Slots ``t .. t + 5`` are scratch."""
+    partials + 2``; when ``partials`` is ``_TARGET`` (-2), ``dx, dy`` alone.
+    Slots ``t .. t + 5`` are scratch."""
     ax, ay, bx, by = ab[0], ab[1], ab[2], ab[3]
     p, q, rbx, rby, px, py = t, t + 1, t + 2, t + 3, t + 4, t + 5
     # R(phi) b: rbx = c bx - s by, rby = s bx + c by
@@ -191,6 +199,8 @@ def _leg(
     _shift(lo, hi, row, ax, row, w)
     _add(lo, hi, x + 1, rby, row + 1, w)
     _shift(lo, hi, row + 1, ay, row + 1, w)
+    if partials == _TARGET:
+        return
     # the turn (R b) x (P - A)
     _shift(lo, hi, x, ax, px, w)
     _shift(lo, hi, x + 1, ay, py, w)
@@ -258,8 +268,7 @@ def det_a_bounds(
     s_lo, s_hi = np.empty((_SLOTS, w)), np.empty((_SLOTS, w))
     s_lo[_ONE], s_hi[_ONE] = 1.0, 1.0
     s_lo[_ZERO], s_hi[_ZERO] = 0.0, 0.0
-    # the slots as run-time integers (a constant argument would have numba compile
-    # the helpers once for each slot number)
+    # the slots as run-time integers (see Slot)
     x, c, mx, mc = np.int64(_X), np.int64(_C), np.int64(_MX), np.int64(_MC)
     one, zero, nat, tot = np.int64(_ONE), np.int64(_ZERO), np.int64(_NAT), np.int64(_TOT)
     total, term, width, temp = np.int64(_SUM), np.int64(_TERM), np.int64(_WIDTH), np.int64(_TEMP)
@@ -282,7 +291,7 @@ def det_a_bounds(
         for k in range(3):
             part = np.int64(_PARTS) + 3 * k
             _leg(s_lo, s_hi, x, c, legs[k], rows[3 * k], part, temp, size)
-            _leg(s_lo, s_hi, mx, mc, legs[k], centre[3 * k], np.int64(-1), temp, size)
+            _leg(s_lo, s_hi, mx, mc, legs[k], centre[3 * k], np.int64(_NONE), temp, size)
         _det3(s_lo, s_hi, rows, nat, temp, size)
         _det3(s_lo, s_hi, centre, tot, temp, size)
         for axis in range(3):
@@ -358,7 +367,7 @@ def joint_gradient_bounds(
     for s in range(0, n, w):
         size = min(w, n - s)
         _load(s_lo, s_hi, lo, hi, s, size, x, c)
-        _leg(s_lo, s_hi, x, c, leg, row, np.int64(-1), temp, size)
+        _leg(s_lo, s_hi, x, c, leg, row, np.int64(_NONE), temp, size)
         for j in range(size):
             r_lo, r_hi = rho_lo[s + j], rho_hi[s + j]
             straddles = r_lo <= 0 and r_hi >= 0
@@ -380,14 +389,14 @@ def reach_bounds(
     ``leg`` = (A_x, A_y, b_x, b_y) over the (n, 3) boxes into ``out`` (n,), as
     ``intervals.square`` and ``sqrt`` give it."""
     w = _CHUNK
-    # slots: x, y, phi; cos, sin; the row (dx, dy, turn); dx^2, dy^2; scratch
+    # slots: x, y, phi; cos, sin; dx, dy (and the turn's slot, unused); dx^2, dy^2; scratch
     x, c, row, sq, temp = np.int64(0), np.int64(3), np.int64(5), np.int64(8), np.int64(10)
     s_lo, s_hi = np.empty((temp + 6, w)), np.empty((temp + 6, w))
     n = lo.shape[0]
     for s in range(0, n, w):
         size = min(w, n - s)
         _load(s_lo, s_hi, lo, hi, s, size, x, c)
-        _leg(s_lo, s_hi, x, c, leg, row, np.int64(-1), temp, size)
+        _leg(s_lo, s_hi, x, c, leg, row, np.int64(_TARGET), temp, size)
         # squares: x * x, from 0 where x straddles 0
         for e in range(2):
             _mul(s_lo, s_hi, row + e, row + e, sq + e, size)
