@@ -6,8 +6,9 @@ Each kernel computes what :class:`~.three_rpr.ThreeRPR` and
 operations: the same operations on the same operands in the same order, each
 rounded outwards by the compiled primitives of :mod:`moveability.intervals`
 that the Interval operators apply element by element (``mul_into``,
-``add_into``, ``sub_into``, ``interval_mul``, ``interval_sub``, ``_below`` /
-``_above``, ``point_sin_cos`` and the steps of ``_trig_bounds``). The bounds are
+``add_into``, ``sub_into``, ``interval_mul``, ``interval_sub``, ``next_below``
+and ``point_sin_cos``; the cosine and sine of the boxes' phi come from
+``intervals.cos`` and ``sin``, one compiled pass each). The bounds are
 thus the same floats, bit for bit (tests/mechanisms/test_three_rpr_kernels.py
 compares them on random boxes of every kind), computed chunk by chunk in
 scratch that stays in cache, with no array allocated per operation and no
@@ -15,7 +16,8 @@ Python between the operations.
 
 A leg enters as ``(A_x, A_y, b_x, b_y)``: its base joint and its platform joint
 in the platform frame. Boxes of poses are (n, 3) C-contiguous arrays ``lo``,
-``hi`` of ``(x, y, phi)``.
+``hi`` of ``(x, y, phi)``, with ``trig`` (4, n): the bounds of the cosine of
+their phi, then of its sine (``intervals.cos`` and ``sin``).
 """
 
 from __future__ import annotations
@@ -25,18 +27,11 @@ from numba import njit
 from numpy.typing import NDArray
 
 from ..intervals import (
-    _LIB_REL,
-    _LIB_TINY,
-    _REL_1,
-    _TINY,
-    _TWO_PI,
-    _above,
-    _below,
-    _holds_angle,
     add_into,
     interval_mul,
     interval_sub,
     mul_into,
+    next_below,
     point_sin_cos,
     sub_into,
 )
@@ -53,32 +48,11 @@ Slot = int | np.int64
 ROW_ITEMS = 6
 
 
-@njit(cache=True, nogil=True)
-def _trig_range(a: float, b: float, sine: bool) -> tuple[float, float]:  # pragma: no cover
-    """The range of ``sin`` (or ``cos``) over ``[a, b]``: one element of
-    ``intervals._trig_bounds``, its steps in its order (so the same bounds)."""
-    top = 0.5 * np.pi if sine else 0.0
-    bottom = -0.5 * np.pi if sine else np.pi
-    fa = np.sin(a) if sine else np.cos(a)
-    fb = np.sin(b) if sine else np.cos(b)
-    if fa != fa or fb != fb:
-        low = np.nan
-        high = np.nan
-    else:
-        low = min(fa, fb)
-        high = max(fa, fb)
-    wide = b - a >= _TWO_PI
-    if wide or _holds_angle(a, b, bottom):
-        low = -1.0
-    else:
-        low = _below(low, _LIB_REL, _LIB_TINY, False)
-    if wide or _holds_angle(a, b, top):
-        high = 1.0
-    else:
-        high = _above(high, _LIB_REL, _LIB_TINY, False)
-    low = low if low != low else max(low, -1.0)
-    high = high if high != high else min(high, 1.0)
-    return low, high
+@njit(cache=True, nogil=True, inline="always")
+def _up(x: float) -> float:  # pragma: no cover - compiled
+    """An upper bound moved up as :func:`~moveability.intervals.next_below` moves a
+    lower bound down (``intervals._above`` by one ulp: ``-_below(-x)``)."""
+    return -next_below(-x)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -148,18 +122,25 @@ def _negate(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: 
 
 @njit(cache=True, nogil=True)
 def _load(
-    lo: Array, hi: Array, box_lo: Array, box_hi: Array, s: int, w: int, x: Slot, c: Slot
+    lo: Array,
+    hi: Array,
+    box_lo: Array,
+    box_hi: Array,
+    trig: Array,
+    s: int,
+    w: int,
+    x: Slot,
+    c: Slot,
 ) -> None:  # pragma: no cover - compiled
     """The boxes ``s:s + w``: their coordinates into slots ``x``, ``x + 1``, ``x +
-    2``, the cosine and sine of their phi (``intervals.cos``, ``sin``) into slots
-    ``c``, ``c + 1``."""
+    2``, the cosine and sine of their phi (``trig``: (4, n), the bounds of the
+    cosine then of the sine) into slots ``c``, ``c + 1``."""
     for j in range(w):
         for axis in range(3):
             lo[x + axis, j] = box_lo[s + j, axis]
             hi[x + axis, j] = box_hi[s + j, axis]
-        a, b = box_lo[s + j, 2], box_hi[s + j, 2]
-        lo[c, j], hi[c, j] = _trig_range(a, b, False)
-        lo[c + 1, j], hi[c + 1, j] = _trig_range(a, b, True)
+        lo[c, j], hi[c, j] = trig[0, s + j], trig[1, s + j]
+        lo[c + 1, j], hi[c + 1, j] = trig[2, s + j], trig[3, s + j]
 
 
 #: the ``partials`` of :func:`_leg`: none; none and no turn either
@@ -256,7 +237,7 @@ _SLOTS = 50
 
 @njit(cache=True, nogil=True)
 def det_a_bounds(
-    lo: Array, hi: Array, legs: Array, out_lo: Array, out_hi: Array
+    lo: Array, hi: Array, trig: Array, legs: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
     """``ThreeRPR.det_a_boxes`` of the (n, 3) boxes ``[lo, hi]`` into ``out``
     (n,), with ``legs`` (3, 4) the legs' (A_x, A_y, b_x, b_y): the natural
@@ -278,7 +259,7 @@ def det_a_bounds(
     n = lo.shape[0]
     for s in range(0, n, w):
         size = min(w, n - s)
-        _load(s_lo, s_hi, lo, hi, s, size, x, c)
+        _load(s_lo, s_hi, lo, hi, trig, s, size, x, c)
         for j in range(size):
             for axis in range(3):
                 # as numpy rounds 0.5 * (lo + hi)
@@ -322,7 +303,7 @@ def det_a_bounds(
 
 @njit(cache=True, nogil=True)
 def row_bounds(
-    lo: Array, hi: Array, legs: Array, out_lo: Array, out_hi: Array
+    lo: Array, hi: Array, trig: Array, legs: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
     """The rows of A over the (n, 3) boxes and their partials that are not
     constants, into ``out`` (3 * ROW_ITEMS, n): for leg ``k`` at ``ROW_ITEMS *
@@ -335,7 +316,7 @@ def row_bounds(
     n = lo.shape[0]
     for s in range(0, n, w):
         size = min(w, n - s)
-        _load(s_lo, s_hi, lo, hi, s, size, x, c)
+        _load(s_lo, s_hi, lo, hi, trig, s, size, x, c)
         for k in range(3):
             at = items + ROW_ITEMS * k
             _leg(s_lo, s_hi, x, c, legs[k], at, at + 3, temp, size)
@@ -352,7 +333,14 @@ def _reciprocal(x: float) -> float:  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def joint_gradient_bounds(
-    lo: Array, hi: Array, leg: Array, rho_lo: Array, rho_hi: Array, out_lo: Array, out_hi: Array
+    lo: Array,
+    hi: Array,
+    trig: Array,
+    leg: Array,
+    rho_lo: Array,
+    rho_hi: Array,
+    out_lo: Array,
+    out_hi: Array,
 ) -> None:  # pragma: no cover - compiled
     """``RPRLeg.joint_gradient``: the row of the leg ``leg`` = (A_x, A_y, b_x,
     b_y) over the (n, 3) boxes divided by the length's enclosure ``[rho_lo,
@@ -366,13 +354,13 @@ def joint_gradient_bounds(
     n = lo.shape[0]
     for s in range(0, n, w):
         size = min(w, n - s)
-        _load(s_lo, s_hi, lo, hi, s, size, x, c)
+        _load(s_lo, s_hi, lo, hi, trig, s, size, x, c)
         _leg(s_lo, s_hi, x, c, leg, row, np.int64(_NONE), temp, size)
         for j in range(size):
             r_lo, r_hi = rho_lo[s + j], rho_hi[s + j]
             straddles = r_lo <= 0 and r_hi >= 0
-            i_lo = _below(_reciprocal(r_hi), _REL_1, _TINY, False)
-            i_hi = _above(_reciprocal(r_lo), _REL_1, _TINY, False)
+            i_lo = next_below(_reciprocal(r_hi))
+            i_hi = _up(_reciprocal(r_lo))
             s_lo[inv, j] = -np.inf if straddles else i_lo
             s_hi[inv, j] = np.inf if straddles else i_hi
         for e in range(3):
@@ -383,7 +371,7 @@ def joint_gradient_bounds(
 
 @njit(cache=True, nogil=True)
 def reach_bounds(
-    lo: Array, hi: Array, leg: Array, out_lo: Array, out_hi: Array
+    lo: Array, hi: Array, trig: Array, leg: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
     """``RPRLeg.reach``'s enclosure of the length ``sqrt(dx^2 + dy^2)`` of the leg
     ``leg`` = (A_x, A_y, b_x, b_y) over the (n, 3) boxes into ``out`` (n,), as
@@ -395,7 +383,7 @@ def reach_bounds(
     n = lo.shape[0]
     for s in range(0, n, w):
         size = min(w, n - s)
-        _load(s_lo, s_hi, lo, hi, s, size, x, c)
+        _load(s_lo, s_hi, lo, hi, trig, s, size, x, c)
         _leg(s_lo, s_hi, x, c, leg, row, np.int64(_TARGET), temp, size)
         # squares: x * x, from 0 where x straddles 0
         for e in range(2):
@@ -407,7 +395,7 @@ def reach_bounds(
         for j in range(size):
             # the square root of the non-negative part; NaN above where there is none
             r_lo, r_hi = s_lo[sq, j], s_hi[sq, j]
-            low = 0.0 if r_lo <= 0 else _below(np.sqrt(_max(r_lo, 0.0)), _REL_1, _TINY, False)
-            high = np.nan if r_hi < 0 else _above(np.sqrt(_max(r_hi, 0.0)), _REL_1, _TINY, False)
+            low = 0.0 if r_lo <= 0 else next_below(np.sqrt(_max(r_lo, 0.0)))
+            high = np.nan if r_hi < 0 else _up(np.sqrt(_max(r_hi, 0.0)))
             out_lo[s + j] = _max(low, 0.0)
             out_hi[s + j] = high

@@ -65,14 +65,17 @@ def _trig(lo: Array, hi: Array) -> tuple[Interval, Interval]:
     return iv.cos(phi), iv.sin(phi)
 
 
-def _pose_boxes(lo: Array, hi: Array) -> tuple[Array, Array] | None:
-    """The boxes as the compiled kernels take them, (n, 3) contiguous float arrays
-    (the first three columns); None when they are not (n, k >= 3) arrays."""
+def _pose_boxes(lo: Array, hi: Array) -> tuple[Array, Array, Array] | None:
+    """The boxes as the compiled kernels take them: (n, 3) contiguous float arrays
+    (the first three columns) and the bounds of the cosine and sine of their phi
+    (4, n); None when they are not (n, k >= 3) arrays."""
     lo_a = np.asarray(lo, dtype=np.float64)
     hi_a = np.asarray(hi, dtype=np.float64)
     if lo_a.ndim != 2 or lo_a.shape[1] < 3 or hi_a.shape != lo_a.shape:
         return None
-    return np.ascontiguousarray(lo_a[:, :3]), np.ascontiguousarray(hi_a[:, :3])
+    lo_a, hi_a = np.ascontiguousarray(lo_a[:, :3]), np.ascontiguousarray(hi_a[:, :3])
+    c, s = _trig(lo_a, hi_a)
+    return lo_a, hi_a, np.stack([c.lo, c.hi, s.lo, s.hi])
 
 
 def _leg_geometry(base: tuple[float, float], platform: tuple[float, float]) -> Array:
