@@ -236,8 +236,9 @@ class RPRLeg:
             rho = self._length_intervals(lo, hi)
         else:
             n = boxes[0].shape[0]
-            rho = Interval(np.empty(n), np.empty(n))
-            kernels.reach_bounds(*boxes, _leg_geometry(self.base, self.platform), rho.lo, rho.hi)
+            r_lo, r_hi = np.empty(n), np.empty(n)
+            kernels.reach_bounds(*boxes, _leg_geometry(self.base, self.platform), r_lo, r_hi)
+            rho = Interval(r_lo, r_hi)
         status = np.where(rho.lo > 0, REGULAR, REACH_UNKNOWN).astype(np.uint8)
         return LegReach(
             status=status,
@@ -363,9 +364,9 @@ class ThreeRPR(Mechanism):
         if boxes is None:
             return self._det_a_boxes_intervals(lo, hi, angles, posture)
         n = boxes[0].shape[0]
-        out = Interval(np.empty(n), np.empty(n))
-        kernels.det_a_bounds(*boxes, self._leg_geometry, out.lo, out.hi)
-        return out
+        out_lo, out_hi = np.empty(n), np.empty(n)
+        kernels.det_a_bounds(*boxes, self._leg_geometry, out_lo, out_hi)
+        return Interval(out_lo, out_hi)
 
     def _det_a_boxes_intervals(
         self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
