@@ -38,6 +38,7 @@ from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
 from ..types import Array
+from . import _rpr_kernels as kernels
 from .base import (
     REACH_UNKNOWN,
     REGULAR,
@@ -62,6 +63,24 @@ def _trig(lo: Array, hi: Array) -> tuple[Interval, Interval]:
     """Enclosures of the cosine and sine of phi over boxes of poses."""
     phi = Interval(lo[:, 2], hi[:, 2])
     return iv.cos(phi), iv.sin(phi)
+
+
+def _pose_boxes(lo: Array, hi: Array) -> tuple[Array, Array, Array] | None:
+    """The boxes as the compiled kernels take them: (n, 3) contiguous float arrays
+    (the first three columns) and the bounds of the cosine and sine of their phi
+    (4, n); None when they are not (n, k >= 3) arrays."""
+    lo_a = np.asarray(lo, dtype=np.float64)
+    hi_a = np.asarray(hi, dtype=np.float64)
+    if lo_a.ndim != 2 or lo_a.shape[1] < 3 or hi_a.shape != lo_a.shape:
+        return None
+    lo_a, hi_a = np.ascontiguousarray(lo_a[:, :3]), np.ascontiguousarray(hi_a[:, :3])
+    c, s = _trig(lo_a, hi_a)
+    return lo_a, hi_a, np.stack([c.lo, c.hi, s.lo, s.hi])
+
+
+def _leg_geometry(base: tuple[float, float], platform: tuple[float, float]) -> Array:
+    """A leg as the compiled kernels take it: ``(A_x, A_y, b_x, b_y)``."""
+    return np.array([*base, *platform], dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -174,7 +193,24 @@ class RPRLeg:
         return self.a_row_derivatives(lo, hi, trig), [zero, zero, zero]
 
     def joint_gradient(self, lo: Array, hi: Array, branch: int, angles: Interval) -> list[Interval]:
-        """``drho/dX = row / rho`` (``angles`` encloses rho)."""
+        """``drho/dX = row / rho`` (``angles`` encloses rho), in one compiled pass
+        (the bounds of :meth:`_joint_gradient_intervals`, bit for bit)."""
+        boxes = _pose_boxes(lo, hi)
+        n = -1 if boxes is None else boxes[0].shape[0]
+        if boxes is None or angles.lo.shape not in ((n,), ()):
+            return self._joint_gradient_intervals(lo, hi, branch, angles)
+        rho_lo = np.ascontiguousarray(np.broadcast_to(angles.lo, (n,)), dtype=np.float64)
+        rho_hi = np.ascontiguousarray(np.broadcast_to(angles.hi, (n,)), dtype=np.float64)
+        out_lo, out_hi = np.empty((3, n)), np.empty((3, n))
+        kernels.joint_gradient_bounds(
+            *boxes, _leg_geometry(self.base, self.platform), rho_lo, rho_hi, out_lo, out_hi
+        )
+        return [Interval(out_lo[j], out_hi[j]) for j in range(3)]
+
+    def _joint_gradient_intervals(
+        self, lo: Array, hi: Array, branch: int, angles: Interval
+    ) -> list[Interval]:
+        """:meth:`joint_gradient` by :class:`Interval` operations (the reference)."""
         return [r / angles for r in self.a_row_boxes(lo, hi, angles)]
 
     #: the length's rate along a turn about :meth:`turn_centre`: it stays
@@ -191,9 +227,18 @@ class RPRLeg:
         return np.ones(lo.shape[0], dtype=bool)
 
     def reach(self, lo: Array, hi: Array) -> LegReach:
-        """Every pose is reachable; REGULAR where the length certainly does not vanish."""
-        dx, dy, _, _ = self._target_boxes(lo, hi)
-        rho = iv.sqrt(iv.square(dx) + iv.square(dy))
+        """Every pose is reachable; REGULAR where the length certainly does not vanish.
+
+        The length's enclosure in one compiled pass (the bounds of
+        :meth:`_length_intervals`, bit for bit)."""
+        boxes = _pose_boxes(lo, hi)
+        if boxes is None:
+            rho = self._length_intervals(lo, hi)
+        else:
+            n = boxes[0].shape[0]
+            r_lo, r_hi = np.empty(n), np.empty(n)
+            kernels.reach_bounds(*boxes, _leg_geometry(self.base, self.platform), r_lo, r_hi)
+            rho = Interval(r_lo, r_hi)
         status = np.where(rho.lo > 0, REGULAR, REACH_UNKNOWN).astype(np.uint8)
         return LegReach(
             status=status,
@@ -201,6 +246,12 @@ class RPRLeg:
             hull=rho,
             fold_connected=np.zeros(lo.shape[0], dtype=bool),
         )
+
+    def _length_intervals(self, lo: Array, hi: Array) -> Interval:
+        """The enclosure of the length over boxes by :class:`Interval` operations
+        (the reference of :meth:`reach`)."""
+        dx, dy, _, _ = self._target_boxes(lo, hi)
+        return iv.sqrt(iv.square(dx) + iv.square(dy))
 
     def fold_waypoints(self, lo: Array, hi: Array, status: int) -> tuple[Array, Array]:
         raise ValueError("an RPR leg has one branch: it never changes posture")
@@ -264,6 +315,10 @@ class ThreeRPR(Mechanism):
             for i, (a, b) in enumerate(zip(self.base, self.platform, strict=True))
         )
         self.legs = self.rpr_legs
+        # the legs as the compiled kernels take them, one (A_x, A_y, b_x, b_y) a row
+        self._leg_geometry = np.stack(
+            [_leg_geometry(a, b) for a, b in zip(self.base, self.platform, strict=True)]
+        )
         # |P - A_i| <= rho_max_i + |b_i|: the box holds the intersection of those disks
         lo = np.full(2, -np.inf)
         hi = np.full(2, np.inf)
@@ -286,7 +341,37 @@ class ThreeRPR(Mechanism):
     ) -> Interval:
         """Enclosure of det A over boxes: the rows depend on the pose only, so the
         mean-value form ``D(c) + sum_j dD/dx_j(box) (x_j - c_j)`` about the centre
-        ``c`` encloses it too; the narrower of the two (intersected) is kept."""
+        ``c`` encloses it too; the narrower of the two (intersected) is kept.
+
+        One compiled pass over the boxes (:func:`._rpr_kernels.det_a_bounds`): the
+        bounds of :meth:`_det_a_boxes_intervals`, bit for bit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from moveability.limits import JointLimit
+        >>> stroke = JointLimit(10.0, 25.0, prismatic=True)
+        >>> m = ThreeRPR([[0, 0], [15.91, 0], [0, 10]], [[0, 0], [17.04, 0], [13.24, 16.1]],
+        ...              (stroke, stroke, stroke))
+        >>> lo, hi = np.array([[5.0, 8.0, 0.2]]), np.array([[5.5, 8.5, 0.25]])
+        >>> points = np.array([[5.0, 8.0, 0.2], [5.5, 8.5, 0.25], [5.2, 8.4, 0.22]])
+        >>> det = m.det_a_boxes(lo, hi, [])
+        >>> exact = m.det_a(points, m.joint_angles(points)[:, 0])
+        >>> bool(((det.lo <= exact) & (exact <= det.hi)).all())
+        True
+        """
+        boxes = _pose_boxes(lo, hi)
+        if boxes is None:
+            return self._det_a_boxes_intervals(lo, hi, angles, posture)
+        n = boxes[0].shape[0]
+        out_lo, out_hi = np.empty(n), np.empty(n)
+        kernels.det_a_bounds(*boxes, self._leg_geometry, out_lo, out_hi)
+        return Interval(out_lo, out_hi)
+
+    def _det_a_boxes_intervals(
+        self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
+    ) -> Interval:
+        """:meth:`det_a_boxes` by :class:`Interval` operations (the reference)."""
         # the legs share the cosine and sine of phi
         trig = _trig(lo, hi)
         rows = [
@@ -311,7 +396,32 @@ class ThreeRPR(Mechanism):
         self, lo: Array, hi: Array, angles: list[Interval]
     ) -> tuple[list[list[Interval]], list[tuple[list[list[Interval]], list[Interval]]]]:
         """The rows of A over boxes and their partial derivatives, as the base class
-        gives them, the legs sharing the cosine and sine of phi."""
+        gives them, in one compiled pass (:func:`._rpr_kernels.row_bounds`: the
+        bounds of :meth:`_rows_and_partials_intervals`, bit for bit)."""
+        boxes = _pose_boxes(lo, hi)
+        if boxes is None:
+            return self._rows_and_partials_intervals(lo, hi, angles)
+        n = boxes[0].shape[0]
+        size = kernels.ROW_ITEMS
+        out_lo, out_hi = np.empty((3 * size, n)), np.empty((3 * size, n))
+        kernels.row_bounds(*boxes, self._leg_geometry, out_lo, out_hi)
+        one, zero = iv.as_interval(np.ones(n)), iv.as_interval(np.zeros(n))
+        rows, partials = [], []
+        for k in range(3):
+            dx, dy, turn, minus_rby, rbx, spin = (
+                Interval(out_lo[size * k + j], out_hi[size * k + j]) for j in range(size)
+            )
+            rows.append([dx, dy, turn])
+            partials.append(
+                ([[one, zero, minus_rby], [zero, one, rbx], [minus_rby, rbx, spin]], [zero] * 3)
+            )
+        return rows, partials
+
+    def _rows_and_partials_intervals(
+        self, lo: Array, hi: Array, angles: list[Interval]
+    ) -> tuple[list[list[Interval]], list[tuple[list[list[Interval]], list[Interval]]]]:
+        """:meth:`rows_and_partials` by :class:`Interval` operations (the reference),
+        the legs sharing the cosine and sine of phi."""
         trig = _trig(lo, hi)
         rows = [leg.a_row_boxes(lo, hi, angles[i], trig) for i, leg in enumerate(self.rpr_legs)]
         partials = [

@@ -1,0 +1,401 @@
+"""Compiled interval enclosures of the 3-RPR: det A, the rows of A and their
+partials, the legs' lengths and joint gradients over boxes of poses.
+
+Each kernel computes what :class:`~.three_rpr.ThreeRPR` and
+:class:`~.three_rpr.RPRLeg` compute with :class:`~moveability.intervals.Interval`
+operations: the same operations on the same operands in the same order, each
+rounded outwards by the compiled primitives of :mod:`moveability.intervals`
+that the Interval operators apply element by element (``mul_into``,
+``add_into``, ``sub_into``, ``interval_mul``, ``interval_sub``, ``next_below``
+and ``point_sin_cos``; the cosine and sine of the boxes' phi come from
+``intervals.cos`` and ``sin``, one compiled pass each). The bounds are
+thus the same floats, bit for bit (tests/mechanisms/test_three_rpr_kernels.py
+compares them on random boxes of every kind), computed chunk by chunk in
+scratch that stays in cache, with no array allocated per operation and no
+Python between the operations.
+
+A leg enters as ``(A_x, A_y, b_x, b_y)``: its base joint and its platform joint
+in the platform frame. Boxes of poses are (n, 3) C-contiguous arrays ``lo``,
+``hi`` of ``(x, y, phi)``, with ``trig`` (4, n): the bounds of the cosine of
+their phi, then of its sine (``intervals.cos`` and ``sin``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from ..intervals import (
+    add_into,
+    interval_mul,
+    interval_sub,
+    mul_into,
+    next_below,
+    point_sin_cos,
+    sub_into,
+)
+from ..types import Array
+
+__all__ = ["det_a_bounds", "joint_gradient_bounds", "reach_bounds", "row_bounds"]
+
+#: a slot (a row of the scratch, see below); the kernels pass them as np.int64: a
+#: constant would have numba compile each helper once for each slot number
+Slot = int | np.int64
+
+#: the entries of one leg in :func:`row_bounds`: the row (dx, dy, turn), then
+#: the partials that are not constants (-rby, rbx, -(rbx px + rby py))
+ROW_ITEMS = 6
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _up(x: float) -> float:  # pragma: no cover - compiled
+    """An upper bound moved up as :func:`~moveability.intervals.next_below` moves a
+    lower bound down (``intervals._above`` by one ulp: ``-_below(-x)``)."""
+    return -next_below(-x)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _max(a: float, b: float) -> float:  # pragma: no cover - compiled
+    """``np.maximum`` of two floats: NaN if either is, else ``a`` when ``a >= b``."""
+    return a if (a >= b or a != a) else b
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
+    """``np.minimum`` of two floats: NaN if either is, else ``a`` when ``a <= b``."""
+    return a if (a <= b or a != a) else b
+
+
+# ------------------------------------------------------------------ passes
+# A kernel works chunk by chunk: each quantity of a chunk's boxes is a row (a
+# "slot") of two scratch arrays ``lo``, ``hi`` (slots x _CHUNK), and each
+# interval operation one compiled loop over the chunk's boxes (mul_into and the
+# like: the same rounding as the Interval operators, element by element).
+
+#: boxes per chunk: the scratch (about 50 slots, 2 x 8 bytes a box each) stays in cache
+_CHUNK = 256
+
+
+@njit(cache=True, nogil=True)
+def _mul(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` * slot ``b`` (the first ``w`` boxes)."""
+    mul_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
+
+
+@njit(cache=True, nogil=True)
+def _add(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` + slot ``b``."""
+    add_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
+
+
+@njit(cache=True, nogil=True)
+def _sub(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` - slot ``b``."""
+    sub_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
+
+
+@njit(cache=True, nogil=True)
+def _scale(lo: Array, hi: Array, a: Slot, c: float, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` * the number ``c`` (``Interval * float``)."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_mul(a_lo[j], a_hi[j], c, c)
+
+
+@njit(cache=True, nogil=True)
+def _shift(lo: Array, hi: Array, a: Slot, c: float, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` - the number ``c`` (``Interval - float``)."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_sub(a_lo[j], a_hi[j], c, c)
+
+
+@njit(cache=True, nogil=True)
+def _negate(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = - slot ``a`` (exact)."""
+    for j in range(w):
+        a_lo = lo[a, j]
+        lo[o, j] = -hi[a, j]
+        hi[o, j] = -a_lo
+
+
+@njit(cache=True, nogil=True)
+def _load(
+    lo: Array,
+    hi: Array,
+    box_lo: Array,
+    box_hi: Array,
+    trig: Array,
+    s: int,
+    w: int,
+    x: Slot,
+    c: Slot,
+) -> None:  # pragma: no cover - compiled
+    """The boxes ``s:s + w``: their coordinates into slots ``x``, ``x + 1``, ``x +
+    2``, the cosine and sine of their phi (``trig``: (4, n), the bounds of the
+    cosine then of the sine) into slots ``c``, ``c + 1``."""
+    for j in range(w):
+        for axis in range(3):
+            lo[x + axis, j] = box_lo[s + j, axis]
+            hi[x + axis, j] = box_hi[s + j, axis]
+        lo[c, j], hi[c, j] = trig[0, s + j], trig[1, s + j]
+        lo[c + 1, j], hi[c + 1, j] = trig[2, s + j], trig[3, s + j]
+
+
+#: the ``partials`` of :func:`_leg`: none; none and no turn either
+_NONE, _TARGET = -1, -2
+
+
+@njit(cache=True, nogil=True)
+def _leg(
+    lo: Array,
+    hi: Array,
+    x: Slot,
+    c: Slot,
+    ab: Array,
+    row: Slot,
+    partials: Slot,
+    t: Slot,
+    w: int,
+) -> None:  # pragma: no cover - compiled
+    """One leg over the chunk, as ``RPRLeg._target_boxes``, ``a_row_boxes`` and
+    ``a_row_derivatives`` compute it, from the pose in slots ``x, x + 1`` (x, y)
+    and the cosine and sine of phi in ``c, c + 1``, with ``ab`` = (A_x, A_y,
+    b_x, b_y): the row ``dx, dy, rbx py - rby px`` into slots ``row .. row + 2``;
+    when ``partials >= 0``, ``-rby, rbx, -(rbx px + rby py)`` into ``partials ..
+    partials + 2``; when ``partials`` is ``_TARGET`` (-2), ``dx, dy`` alone.
+    Slots ``t .. t + 5`` are scratch."""
+    ax, ay, bx, by = ab[0], ab[1], ab[2], ab[3]
+    p, q, rbx, rby, px, py = t, t + 1, t + 2, t + 3, t + 4, t + 5
+    # R(phi) b: rbx = c bx - s by, rby = s bx + c by
+    _scale(lo, hi, c, bx, p, w)
+    _scale(lo, hi, c + 1, by, q, w)
+    _sub(lo, hi, p, q, rbx, w)
+    _scale(lo, hi, c + 1, bx, p, w)
+    _scale(lo, hi, c, by, q, w)
+    _add(lo, hi, p, q, rby, w)
+    # d = (P + R b) - A
+    _add(lo, hi, x, rbx, row, w)
+    _shift(lo, hi, row, ax, row, w)
+    _add(lo, hi, x + 1, rby, row + 1, w)
+    _shift(lo, hi, row + 1, ay, row + 1, w)
+    if partials == _TARGET:
+        return
+    # the turn (R b) x (P - A)
+    _shift(lo, hi, x, ax, px, w)
+    _shift(lo, hi, x + 1, ay, py, w)
+    _mul(lo, hi, rbx, py, p, w)
+    _mul(lo, hi, rby, px, q, w)
+    _sub(lo, hi, p, q, row + 2, w)
+    if partials < 0:
+        return
+    _negate(lo, hi, rby, partials, w)
+    lo[partials + 1, :w] = lo[rbx, :w]
+    hi[partials + 1, :w] = hi[rbx, :w]
+    _mul(lo, hi, rbx, px, p, w)
+    _mul(lo, hi, rby, py, q, w)
+    _add(lo, hi, p, q, partials + 2, w)
+    _negate(lo, hi, partials + 2, partials + 2, w)
+
+
+@njit(cache=True, nogil=True)
+def _det3(
+    lo: Array, hi: Array, m: NDArray[np.int64], o: Slot, t: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = the determinant of the 3 x 3 matrix of slots ``m`` (9, row by
+    row) as ``base._det_chunk`` expands it: the first row's cofactors,
+    alternately subtracted and added. Slots ``t``, ``t + 1`` are scratch."""
+    p, q = t, t + 1
+    # j = 0: a00 (a11 a22 - a12 a21)
+    _mul(lo, hi, m[4], m[8], p, w)
+    _mul(lo, hi, m[5], m[7], q, w)
+    _sub(lo, hi, p, q, p, w)
+    _mul(lo, hi, m[0], p, o, w)
+    # j = 1: - a01 (a10 a22 - a12 a20)
+    _mul(lo, hi, m[3], m[8], p, w)
+    _mul(lo, hi, m[5], m[6], q, w)
+    _sub(lo, hi, p, q, p, w)
+    _mul(lo, hi, m[1], p, q, w)
+    _sub(lo, hi, o, q, o, w)
+    # j = 2: + a02 (a10 a21 - a11 a20)
+    _mul(lo, hi, m[3], m[7], p, w)
+    _mul(lo, hi, m[4], m[6], q, w)
+    _sub(lo, hi, p, q, p, w)
+    _mul(lo, hi, m[2], p, q, w)
+    _add(lo, hi, o, q, o, w)
+
+
+# the slots of det_a_bounds
+_X, _C, _MX, _MC = 0, 3, 5, 8  # box (x, y, phi), its cos, sin; the same at the centre
+_ROWS, _MROWS, _PARTS = 10, 19, 28  # leg k's row at + 3 k; its partials at _PARTS + 3 k
+_ONE, _ZERO = 37, 38
+_NAT, _TOT, _SUM, _TERM, _WIDTH = 39, 40, 41, 42, 43
+_TEMP = 44  # 6 slots of scratch
+_SLOTS = 50
+
+
+@njit(cache=True, nogil=True)
+def det_a_bounds(
+    lo: Array, hi: Array, trig: Array, legs: Array, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """``ThreeRPR.det_a_boxes`` of the (n, 3) boxes ``[lo, hi]`` into ``out``
+    (n,), with ``legs`` (3, 4) the legs' (A_x, A_y, b_x, b_y): the natural
+    enclosure of the 3 x 3 determinant of the rows intersected with the
+    mean-value form about the centre ``c``, ``det(c) + sum_j dD/dx_j (x_j -
+    c_j)``, where ``dD/dx_j`` is the sum of the three determinants with one row
+    differentiated along ``x_j`` (leg 0's first)."""
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_SLOTS, w)), np.empty((_SLOTS, w))
+    s_lo[_ONE], s_hi[_ONE] = 1.0, 1.0
+    s_lo[_ZERO], s_hi[_ZERO] = 0.0, 0.0
+    # the slots as run-time integers (see Slot)
+    x, c, mx, mc = np.int64(_X), np.int64(_C), np.int64(_MX), np.int64(_MC)
+    one, zero, nat, tot = np.int64(_ONE), np.int64(_ZERO), np.int64(_NAT), np.int64(_TOT)
+    total, term, width, temp = np.int64(_SUM), np.int64(_TERM), np.int64(_WIDTH), np.int64(_TEMP)
+    rows = np.arange(_ROWS, _ROWS + 9, dtype=np.int64)
+    centre = np.arange(_MROWS, _MROWS + 9, dtype=np.int64)
+    matrix = np.empty(9, dtype=np.int64)
+    n = lo.shape[0]
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        _load(s_lo, s_hi, lo, hi, trig, s, size, x, c)
+        for j in range(size):
+            for axis in range(3):
+                # as numpy rounds 0.5 * (lo + hi)
+                m = 0.5 * (lo[s + j, axis] + hi[s + j, axis])
+                s_lo[mx + axis, j] = m
+                s_hi[mx + axis, j] = m
+            # the sine, then the cosine, of [m, m]
+            sl, sh, cl, ch = point_sin_cos(s_lo[mx + 2, j])
+            s_lo[mc, j], s_hi[mc, j], s_lo[mc + 1, j], s_hi[mc + 1, j] = cl, ch, sl, sh
+        for k in range(3):
+            part = np.int64(_PARTS) + 3 * k
+            _leg(s_lo, s_hi, x, c, legs[k], rows[3 * k], part, temp, size)
+            _leg(s_lo, s_hi, mx, mc, legs[k], centre[3 * k], np.int64(_NONE), temp, size)
+        _det3(s_lo, s_hi, rows, nat, temp, size)
+        _det3(s_lo, s_hi, centre, tot, temp, size)
+        for axis in range(3):
+            for k in range(3):
+                # the rows with leg k's differentiated along the axis: along x
+                # (1, 0, -rby), along y (0, 1, rbx), along phi (-rby, rbx, spin)
+                matrix[:] = rows
+                part = np.int64(_PARTS) + 3 * k
+                if axis == 0:
+                    matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = one, zero, part
+                elif axis == 1:
+                    matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = zero, one, part + 1
+                else:
+                    matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = part, part + 1, part + 2
+                if k == 0:
+                    _det3(s_lo, s_hi, matrix, total, temp, size)
+                else:
+                    _det3(s_lo, s_hi, matrix, term, temp, size)
+                    _add(s_lo, s_hi, total, term, total, size)
+            # + dD/dx_j * (x_j - c_j)
+            _sub(s_lo, s_hi, x + axis, mx + axis, width, size)
+            _mul(s_lo, s_hi, total, width, term, size)
+            _add(s_lo, s_hi, tot, term, tot, size)
+        for j in range(size):
+            out_lo[s + j] = _max(s_lo[nat, j], s_lo[tot, j])
+            out_hi[s + j] = _min(s_hi[nat, j], s_hi[tot, j])
+
+
+@njit(cache=True, nogil=True)
+def row_bounds(
+    lo: Array, hi: Array, trig: Array, legs: Array, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """The rows of A over the (n, 3) boxes and their partials that are not
+    constants, into ``out`` (3 * ROW_ITEMS, n): for leg ``k`` at ``ROW_ITEMS *
+    k``, ``dx``, ``dy``, the turn (``a_row_boxes``), then ``-rby``, ``rbx`` and
+    ``-(rbx px + rby py)`` (``a_row_derivatives``)."""
+    w = _CHUNK
+    # slots: x, y, phi; cos, sin; the legs' items; scratch
+    x, c, items, temp = np.int64(0), np.int64(3), np.int64(5), np.int64(5 + 3 * ROW_ITEMS)
+    s_lo, s_hi = np.empty((temp + 6, w)), np.empty((temp + 6, w))
+    n = lo.shape[0]
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        _load(s_lo, s_hi, lo, hi, trig, s, size, x, c)
+        for k in range(3):
+            at = items + ROW_ITEMS * k
+            _leg(s_lo, s_hi, x, c, legs[k], at, at + 3, temp, size)
+        out_lo[:, s : s + size] = s_lo[items:temp, :size]
+        out_hi[:, s : s + size] = s_hi[items:temp, :size]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _reciprocal(x: float) -> float:  # pragma: no cover - compiled
+    """``1.0 / x`` as numpy rounds it, an infinity of the zero's sign for a zero
+    (compiled code would raise)."""
+    return np.copysign(np.inf, x) if x == 0.0 else 1.0 / x
+
+
+@njit(cache=True, nogil=True)
+def joint_gradient_bounds(
+    lo: Array,
+    hi: Array,
+    trig: Array,
+    leg: Array,
+    rho_lo: Array,
+    rho_hi: Array,
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """``RPRLeg.joint_gradient``: the row of the leg ``leg`` = (A_x, A_y, b_x,
+    b_y) over the (n, 3) boxes divided by the length's enclosure ``[rho_lo,
+    rho_hi]`` (n,), into ``out`` (3, n). The division is ``Interval.__truediv__``:
+    the product with ``[1 / hi, 1 / lo]`` rounded outwards, or with the whole
+    line where the length may vanish."""
+    w = _CHUNK
+    # slots: x, y, phi; cos, sin; the row; 1 / rho; scratch
+    x, c, row, inv, temp = np.int64(0), np.int64(3), np.int64(5), np.int64(8), np.int64(9)
+    s_lo, s_hi = np.empty((temp + 6, w)), np.empty((temp + 6, w))
+    n = lo.shape[0]
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        _load(s_lo, s_hi, lo, hi, trig, s, size, x, c)
+        _leg(s_lo, s_hi, x, c, leg, row, np.int64(_NONE), temp, size)
+        for j in range(size):
+            r_lo, r_hi = rho_lo[s + j], rho_hi[s + j]
+            straddles = r_lo <= 0 and r_hi >= 0
+            i_lo = next_below(_reciprocal(r_hi))
+            i_hi = _up(_reciprocal(r_lo))
+            s_lo[inv, j] = -np.inf if straddles else i_lo
+            s_hi[inv, j] = np.inf if straddles else i_hi
+        for e in range(3):
+            _mul(s_lo, s_hi, row + e, inv, row + e, size)
+        out_lo[:, s : s + size] = s_lo[row : row + 3, :size]
+        out_hi[:, s : s + size] = s_hi[row : row + 3, :size]
+
+
+@njit(cache=True, nogil=True)
+def reach_bounds(
+    lo: Array, hi: Array, trig: Array, leg: Array, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """``RPRLeg.reach``'s enclosure of the length ``sqrt(dx^2 + dy^2)`` of the leg
+    ``leg`` = (A_x, A_y, b_x, b_y) over the (n, 3) boxes into ``out`` (n,), as
+    ``intervals.square`` and ``sqrt`` give it."""
+    w = _CHUNK
+    # slots: x, y, phi; cos, sin; dx, dy (and the turn's slot, unused); dx^2, dy^2; scratch
+    x, c, row, sq, temp = np.int64(0), np.int64(3), np.int64(5), np.int64(8), np.int64(10)
+    s_lo, s_hi = np.empty((temp + 6, w)), np.empty((temp + 6, w))
+    n = lo.shape[0]
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        _load(s_lo, s_hi, lo, hi, trig, s, size, x, c)
+        _leg(s_lo, s_hi, x, c, leg, row, np.int64(_TARGET), temp, size)
+        # squares: x * x, from 0 where x straddles 0
+        for e in range(2):
+            _mul(s_lo, s_hi, row + e, row + e, sq + e, size)
+            for j in range(size):
+                straddles = s_lo[row + e, j] <= 0 and s_hi[row + e, j] >= 0
+                s_lo[sq + e, j] = 0.0 if straddles else _max(s_lo[sq + e, j], 0.0)
+        _add(s_lo, s_hi, sq, sq + 1, sq, size)
+        for j in range(size):
+            # the square root of the non-negative part; NaN above where there is none
+            r_lo, r_hi = s_lo[sq, j], s_hi[sq, j]
+            low = 0.0 if r_lo <= 0 else next_below(np.sqrt(_max(r_lo, 0.0)))
+            high = np.nan if r_hi < 0 else _up(np.sqrt(_max(r_hi, 0.0)))
+            out_lo[s + j] = _max(low, 0.0)
+            out_hi[s + j] = high
