@@ -26,6 +26,11 @@ def wrap(a):
     return np.pi - np.mod(np.pi - a, 2 * np.pi)
 
 
+def turned_within(angle, lo, hi):
+    """Whether each angle, moved by whole turns into ``[lo, lo + 2 pi)``, is at most ``hi``."""
+    return lo + np.mod(angle - lo, 2 * np.pi) <= hi
+
+
 def direction(u):
     return np.arctan2(u[..., 1], u[..., 0])
 
@@ -153,10 +158,13 @@ def valid(kind, limits, joints, points, passive=None, obstacles=(), collisions=F
     ok = np.isfinite(joints).all(-1)
     for i, (lo, hi) in enumerate(limits):
         if lo is not None:
-            ok &= (joints[:, i] >= lo) & (joints[:, i] <= hi)
+            # a revolute joint's angle is met modulo a turn (limits may cross pi)
+            ok &= turned_within(joints[:, i], lo, hi) if kind == "3-RRR" else (
+                (joints[:, i] >= lo) & (joints[:, i] <= hi)
+            )
     angles = passive_angles(kind, points)
     for name, (lo, hi) in (passive or {}).items():
-        ok &= (angles[name] >= lo) & (angles[name] <= hi)
+        ok &= turned_within(angles[name], lo, hi)
     segs = links(kind)
     for center, radius in obstacles:
         o = np.asarray(center, dtype=float)

@@ -24,7 +24,13 @@ from moveability.mechanisms import ThreeRPR
 from moveability.mechanisms.constraints import Constraints
 from moveability.mechanisms.registry import load_spec
 from moveability.mechanisms.three_rrr import ThreeRRR
-from three_legged_references import det_a, platform_joints, valid, valid_postures
+from three_legged_references import (
+    det_a,
+    platform_joints,
+    turned_within,
+    valid,
+    valid_postures,
+)
 
 #: the middle of the default 3-RRR's workspace (as in tests/mechanisms/test_three_rrr.py)
 RRR_BOX = ((-3.0, -2.0), (3.0, 4.0))
@@ -362,3 +368,13 @@ def test_the_readme_example():
     assert valid_postures(m, poses)[0][:, 0].tolist() == [True, True]
     answers = analyze(m, precision=(1.5, 1.5, 0.2), resolve=False).locate(poses)["points"]
     assert [a["workspace"] for a in answers] == [True, False]
+
+
+def test_reference_meets_revolute_limits_modulo_a_turn():
+    """The pointwise reference takes a revolute joint's angle modulo a turn, as the
+    library's limits do: limits that cross pi (and the passive ones) included."""
+    rng = np.random.default_rng(5)
+    angles = rng.uniform(-3 * np.pi, 3 * np.pi, 4000)
+    for lo, hi in [(1.83, 5.59), (-np.pi, np.pi), (-1.0, 2.0), (3.0, 3.5), (-4.0, -2.5)]:
+        expected = JointLimit(lo, hi).contains(angles)
+        assert np.array_equal(turned_within(angles, lo, hi), expected), (lo, hi)
