@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -537,3 +538,45 @@ def test_combining_very_different_per_axis_depths_is_a_resolution_error():
     b = HyperTree.build([0, 0], [1, 1], disk, max_depth=(2, 12))
     with pytest.raises(ResolutionError, match="other"):
         a | b
+
+
+def test_precision_too_fine_for_the_memory_available(monkeypatch):
+    """With little memory available the leaf budget shrinks, and a precision whose
+    tree cannot fit is refused while the tree is still small."""
+    import moveability.analysis.result as result_module
+    from moveability import analyze
+    from moveability.mechanisms import FiveBar
+
+    mechanism = FiveBar(7, 8, 5, 8, 5)
+    monkeypatch.setattr(result_module, "available_memory", lambda: 64 * 2**20)
+    budget = result_module.leaf_budget(mechanism)
+    assert budget == 1 << 16  # the floor: 64 MiB hold fewer leaves
+    classified = []
+    classify = result_module.classify_sheets
+
+    def counting(mechanism, lo, hi):
+        classified.append(len(lo))
+        return classify(mechanism, lo, hi)
+
+    monkeypatch.setattr(result_module, "classify_sheets", counting)
+    with raises(ResolutionError, "precision", "memory", f"max_leaves={budget}"):
+        analyze(mechanism, precision=1e-4)
+    # refused on the growth of the undecided cells, long before the budget is held
+    assert 0 < sum(classified) < budget // 4
+    # the same analysis at a coarse precision still runs within that budget
+    assert analyze(mechanism, precision=0.2).count == (2, 2)
+
+
+def test_leaf_budget_follows_the_memory_and_the_postures():
+    from moveability.analysis.result import MAX_LEAVES, leaf_budget
+    from moveability.mechanisms import FiveBar, from_spec, load_spec
+
+    five_bar = FiveBar(7, 8, 5, 8, 5)
+    examples = Path(__file__).resolve().parent.parent / "examples"
+    delta = from_spec(load_spec(examples / "delta.toml"))
+    gib = 2**30
+    # (1 + postures) KiB a leaf for three quarters of the memory
+    assert leaf_budget(five_bar, available=8 * gib) == int(0.75 * 8 * gib // (5 * 1024))
+    assert leaf_budget(delta, available=8 * gib) == int(0.75 * 8 * gib // (9 * 1024))
+    assert leaf_budget(five_bar, available=10**15) == MAX_LEAVES
+    assert leaf_budget(five_bar, available=1) == 1 << 16
