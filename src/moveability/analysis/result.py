@@ -777,19 +777,20 @@ class Analysis:
         nodes = np.argwhere(~done[0] | ~done[1])
         n, n_post = t.status.shape
         m = nodes.shape[0]
+        # per node: whether every flow was tried on it (a saved analysis holds
+        # every flow of every node, see evidence; a mechanism without flows has
+        # none to try)
+        complete = np.full(m, saved is not None or not supports_flows(self.mechanism))
         if saved is not None:
             saved_nodes, bits, exists, faces = saved
             if not np.array_equal(saved_nodes, nodes):
                 raise InvalidParameterError(
                     "path", "a saved analysis whose flows match its sheets", "a mismatch"
                 )
-            # a saved analysis holds every flow of every node (see evidence)
-            complete = np.ones(m, dtype=bool)
         elif reuse is None:
             bits, exists, faces = flow_conditions(
                 self.mechanism, leaves.lo, leaves.hi, t, nodes, axes_only=True
             )
-            complete = np.zeros(m, dtype=bool)
         else:
             old, old_index = reuse
             old_nodes, old_bits, old_exists, old_faces, old_n = old._flows
@@ -808,7 +809,6 @@ class Analysis:
             bits = np.zeros((2, m, old_bits.shape[2]), dtype=np.uint64)
             exists = np.zeros((m, old_exists.shape[1]), dtype=bool)
             faces = np.zeros((old_faces.shape[0], m), dtype=np.uint8)
-            complete = np.zeros(m, dtype=bool)
             bits[:, kept], exists[kept], faces[:, kept] = (
                 old_bits[:, source[kept]],
                 old_exists[source[kept]],
@@ -818,10 +818,7 @@ class Analysis:
             bits[:, fresh], exists[fresh], faces[:, fresh] = new_bits, new_exists, new_faces
         self._spans = slot_spans(t, nodes, self.mechanism.limits)
         self._neighbours = face_neighbours(self.tree, self._face_pairs)
-        if not supports_flows(self.mechanism):
-            complete[:] = True  # no flow to try
         self._flows: tuple[Any, ...] = (nodes, bits, exists, faces, n)
-        #: per node of the flows: whether every flow was tried on it
         self._complete_flows: NDArray[np.bool_] = complete
         attached = self._attached(done, (0, 1), leaves=leaves)
         #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1)
@@ -851,11 +848,11 @@ class Analysis:
 
         Nodes may hold the flows along the pose axes alone: those left open are
         given the others (kept for later calls, :meth:`_complete`) and the
-        attachment goes on with them.
-        Attachment is monotone in the flows: a node attached with fewer flows is
-        attached with more, and every node that all the flows attach attaches
-        in the second pass (every node open after the first has them all), so
-        the result is exactly that of all the flows."""
+        attachment goes on with them. Attachment is monotone in the flows: a
+        node attached with fewer flows is attached with more, and every node
+        that all the flows attach attaches in the second pass (every node open
+        after the first has them all), so the result is exactly that of all the
+        flows."""
         nodes, bits, exists, faces, _ = self._flows
         runs = [
             Attachment(d, nodes, exists, self._neighbours, self._spans) for d in done
