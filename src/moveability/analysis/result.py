@@ -565,9 +565,10 @@ def _chain_search(
     its predecessor on a shortest chain (-1 for a seed or an unreached leaf),
     its label (the part, ``source``, of the seed its chain starts from; -1 where
     unreached) and the two columns of the pairs searched whose leaves have
-    two labels (in the order of ``pairs``): where chains from two parts meet. A leaf takes the label and the chain of the first leaf that
-    reaches it: the seeds in their order, then the leaves in the order they are
-    reached, each one's pairs in the order of ``pairs``."""
+    two labels (in the order of ``pairs``): where chains from two parts meet.
+    A leaf takes the label and the chain of the first leaf that reaches it: the
+    seeds in their order, then the leaves in the order they are reached, each
+    one's pairs in the order of ``pairs``."""
     n = through.size
     degree = np.zeros(n + 1, dtype=np.int64)
     m = 0
