@@ -438,8 +438,19 @@ def _leaf_table(
     source = np.full(n, -1, dtype=np.intp)
     tables = [table for _, _, table in kept]
     offsets = np.cumsum([0] + [len(t.status) for t in tables])
+    # the build classifies level c's cells in key order (children follow their
+    # parents' order): they are the leaves of level c, in order, when the boxes
+    # agree; located one by one otherwise
+    by_level = np.argsort(tree.levels, kind="stable")
+    starts = np.searchsorted(tree.levels[by_level], np.arange(len(kept) + 1))
     for c, (cell_lo, cell_hi, _) in enumerate(kept):
         if not len(cell_lo):
+            continue
+        at = by_level[starts[c] : starts[c + 1]]
+        if at.size == len(cell_lo) and (
+            np.array_equal(leaves.lo[at], cell_lo) and np.array_equal(leaves.hi[at], cell_hi)
+        ):
+            source[at] = offsets[c] + np.arange(at.size)
             continue
         _, leaf = locate(tree, 0.5 * (cell_lo + cell_hi))
         ok = leaf >= 0
