@@ -45,10 +45,13 @@ def test_chain_search_against_scipy_distances(seed):
         if source[w] >= 0:
             assert hops[w] == 0 and pred[w] == -1 and label[w] == source[w]
         elif np.isfinite(hops[w]):
-            # one step nearer a part, along a searched pair, with its label
+            # one step nearer a part, along a searched pair, with its label: of
+            # such neighbours, the one of largest index
             v = int(pred[w])
-            assert hops[v] == hops[w] - 1
-            assert (min(v, w), max(v, w)) in touching
+            nearer = [
+                u for u in range(n) if (min(u, w), max(u, w)) in touching and hops[u] == hops[w] - 1
+            ]
+            assert v == max(nearer)
             assert label[w] == label[v]
         else:
             assert pred[w] == -1 and label[w] == -1

@@ -577,9 +577,8 @@ def _chain_search(
     its label (the part, ``source``, of the seed its chain starts from; -1 where
     unreached) and the two columns of the pairs searched whose leaves have
     two labels (in the order of ``pairs``): where chains from two parts meet.
-    A leaf takes the label and the chain of the first leaf that reaches it: the
-    seeds in their order, then the leaves in the order they are reached, each
-    one's pairs in the order of ``pairs``."""
+    A leaf's chain goes on through its neighbour one step nearer with the
+    largest index, whose label it takes."""
     n = through.size
     degree = np.zeros(n + 1, dtype=np.int64)
     m = 0
@@ -625,10 +624,19 @@ def _chain_search(
             w = neighbour[u]
             if hops[w] == np.inf:
                 hops[w] = hops[v] + 1.0
-                pred[w] = v
-                label[w] = label[v]
                 queue[tail] = w
                 tail += 1
+    # each leaf's predecessor: its neighbour one step nearer with the largest
+    # index; labels in the order reached (a predecessor is reached first)
+    for t in range(tail):
+        w = queue[t]
+        if hops[w] == 0.0:
+            continue
+        for u in range(degree[w], degree[w + 1]):
+            v = neighbour[u]
+            if hops[v] == hops[w] - 1.0 and v > pred[w]:
+                pred[w] = v
+        label[w] = label[pred[w]]
     # the pairs searched whose leaves have two labels: where chains meet
     k = 0
     for t in range(m):
