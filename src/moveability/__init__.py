@@ -14,7 +14,6 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-from ._version import __version__
 from .errors import (
     IncompatibleTreesError,
     InputError,
@@ -25,6 +24,10 @@ from .errors import (
     ResolutionError,
     SpecError,
 )
+
+#: the package's version, written only here (pyproject.toml reads it): no command
+#: pays for importlib.metadata to print it
+__version__ = "0.1.0"
 
 if TYPE_CHECKING:
     from .analysis.planning import default_poses, plan_motion
