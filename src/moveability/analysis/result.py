@@ -14,9 +14,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from ..compiled import kernel
 from ..errors import InvalidParameterError, ResolutionError
 from ..hypertree.keys import MAX_KEY_BITS
 from ..hypertree.measurement import leaf_volumes, locate
@@ -529,7 +529,7 @@ def _reachable_contact(
     return out
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _flow_labels(
     label: NDArray[np.int64], pred: NDArray[np.int32], order: NDArray[np.intp]
 ) -> None:  # pragma: no cover - compiled
@@ -539,7 +539,7 @@ def _flow_labels(
         label[i] = label[pred[i]]
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _walk_back(
     out: NDArray[np.bool_],
     starts: NDArray[np.intp],
@@ -559,7 +559,7 @@ def _walk_back(
                 break
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _chain_edges(
     pairs: NDArray[np.intp], through: NDArray[np.bool_], seeds: NDArray[np.intp], n: int
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
@@ -583,7 +583,7 @@ def _chain_edges(
     return rows, cols
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _grown(
     out: NDArray[np.bool_], pairs: NDArray[np.intp]
 ) -> NDArray[np.bool_]:  # pragma: no cover - compiled
