@@ -398,22 +398,41 @@ def _fallback(info: _Kernel, *args: Any, **kwargs: Any) -> Any:
     return _dispatcher(info)(*args, **kwargs)
 
 
-def _aot(fn: Callable[..., Any], inline: bool) -> Any:
+@functools.cache
+def _source(filename: str) -> str:
+    """A module's path relative to the package directory ("" outside it)."""
+    try:
+        return Path(filename).resolve().relative_to(PACKAGE_DIR).as_posix()
+    except ValueError:
+        return ""
+
+
+def _bind(fn: Callable[..., Any], inline: bool) -> Any:
+    """The AOT-mode kernel of ``fn``: its variants in the extension, if any."""
     assert _EXT is not None and _MANIFEST is not None
-    name = f"{fn.__module__}.{fn.__qualname__}"
     specs: list[list[Any]] = []
     variants = []
-    try:
-        source = Path(fn.__code__.co_filename).resolve().relative_to(PACKAGE_DIR).as_posix()
-    except ValueError:
-        source = ""
-    if source in _MANIFEST["sources"]:
-        # (a module outside the manifest's sources: none of its kernels was compiled)
-        for symbol, arg_specs in _MANIFEST["kernels"].get(name, []):
+    # (a module outside the manifest's sources: none of its kernels was compiled)
+    if _source(fn.__code__.co_filename) in _MANIFEST["sources"]:
+        for symbol, arg_specs in _MANIFEST["kernels"].get(f"{fn.__module__}.{fn.__qualname__}", []):
             if hasattr(_EXT, symbol):
                 variants.append(getattr(_EXT, symbol))
                 specs.append(arg_specs)
-    return _wrapper(fn, _Kernel(fn, inline, variants), specs)
+    info = _Kernel(fn, inline, variants)
+    if variants:
+        return _wrapper(fn, info, specs)
+
+    def call(*args: Any, **kwargs: Any) -> Any:
+        return _fallback(info, *args, **kwargs)
+
+    def match(*args: Any) -> int:
+        return -1
+
+    functools.update_wrapper(call, fn)
+    call.py_func = fn  # type: ignore[attr-defined]
+    call.match = match  # type: ignore[attr-defined]
+    call._moveability_kernel = info  # type: ignore[attr-defined]
+    return call
 
 
 # ----------------------------------------------------------------- the API
@@ -434,7 +453,7 @@ def kernel(fn: Any = None, *, inline: bool = False) -> Any:
     """
 
     def decorate(f: Any) -> Any:
-        out = _njit(f, inline) if _EXT is None else _aot(f, inline)
+        out = _njit(f, inline) if _EXT is None else _bind(f, inline)
         KERNELS[f"{f.__module__}.{f.__qualname__}"] = out
         return out
 

@@ -156,7 +156,7 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         (array(B1, out=True), array(I8), array(I8), array("int32"))
     ],
     "moveability.analysis.result._chain_edges": [(array(I8, 2), array(B1), array(I8), I8)],
-    "moveability.analysis.result._grown": [(array(B1, out=True), array(I8, 2))],
+    "moveability.analysis.result._grown": [(array(B1), array(I8, 2))],
 }
 
 
@@ -203,11 +203,12 @@ def _names(code: types.CodeType) -> set[str]:
     return out
 
 
-def _imported_from(module: types.ModuleType) -> dict[str, tuple[str, str]]:
-    """Names a module binds by ``from X import name`` at its top level -> (X, name)."""
+def _top_level(module: types.ModuleType) -> tuple[dict[str, tuple[str, str]], list[ast.stmt]]:
+    """A module's names bound by ``from X import name`` at its top level -> (X,
+    name), and its top-level statements."""
     tree = ast.parse(Path(module.__file__ or "").read_text())
     package = module.__name__.rsplit(".", 1)[0]
-    out = {}
+    imported = {}
     for node in tree.body:
         if isinstance(node, ast.ImportFrom):
             base = package.split(".")
@@ -217,34 +218,57 @@ def _imported_from(module: types.ModuleType) -> dict[str, tuple[str, str]]:
             else:
                 source = node.module or ""
             for alias in node.names:
-                out[alias.asname or alias.name] = (source, alias.name)
-    return out
+                imported[alias.asname or alias.name] = (source, alias.name)
+    return imported, tree.body
+
+
+def _defined_by(module_name: str, name: str, files: set[str], seen: set[tuple[str, str]]) -> None:
+    """Add to ``files`` the package's sources that a module-level name's value comes
+    from: the module that defines it (through imports) and, for a value computed
+    at import (``_X = f(_Y) * other.Z``), those of the names it is computed from."""
+    module = sys.modules.get(module_name)
+    if (module_name, name) in seen or _module_file(module_name) is None or module is None:
+        return
+    seen.add((module_name, name))
+    files.add(_module_file(module_name) or "")
+    value = getattr(module, name, None)
+    if isinstance(value, types.ModuleType):
+        files.add(_module_file(value.__name__) or "")
+        return
+    imported, body = _top_level(module)
+    if name in imported:
+        _defined_by(*imported[name], files, seen)
+        return
+    rhs: ast.expr | None
+    for node in body:
+        if isinstance(node, ast.Assign):
+            targets, rhs = node.targets, node.value
+        elif isinstance(node, ast.AnnAssign | ast.AugAssign):
+            targets, rhs = [node.target], node.value
+        else:
+            continue
+        if rhs is not None and any(
+            isinstance(t, ast.Name) and t.id == name for x in targets for t in ast.walk(x)
+        ):
+            for used in ast.walk(rhs):
+                if isinstance(used, ast.Name):
+                    _defined_by(module_name, used.id, files, seen)
 
 
 def _sources(kernel_modules: list[str]) -> list[str]:
     """The files the compiled code comes from: the kernels' modules, those that
-    define a global a kernel reads (a constant imported from elsewhere, a module
-    used as a namespace), and this file."""
+    define the globals a kernel reads (constants imported from elsewhere or
+    computed from them, modules used as namespaces), and this file."""
     files = {"compiled/build.py"}
+    seen: set[tuple[str, str]] = set()
     for name in kernel_modules:
-        module = importlib.import_module(name)
+        importlib.import_module(name)
         files.add(_module_file(name) or "")
-        imported = _imported_from(module)
         for qualname, k in KERNELS.items():
             fn = getattr(k, "py_func", None)
-            if fn is None or not qualname.startswith(name + "."):
-                continue
-            for global_name in _names(fn.__code__):
-                value = fn.__globals__.get(global_name)
-                if isinstance(value, types.ModuleType):
-                    files.add(_module_file(value.__name__) or "")
-                    continue
-                source = imported.get(global_name)
-                while source is not None and _module_file(source[0]) is not None:
-                    # follow re-exports to the module that defines the name
-                    files.add(_module_file(source[0]) or "")
-                    origin = importlib.import_module(source[0])
-                    source = _imported_from(origin).get(source[1])
+            if fn is not None and qualname.startswith(name + "."):
+                for global_name in _names(fn.__code__):
+                    _defined_by(fn.__module__, global_name, files, seen)
     files.discard("")
     return sorted(files)
 
