@@ -6,8 +6,9 @@ with :func:`kernel`. When the extension built by :mod:`moveability.compiled.buil
 is present and was compiled from the sources installed now, a kernel that
 Python code calls binds its ahead-of-time (AOT) compiled variants and numba is
 never imported: a process saves numba's import, its initialisation and the
-loading of each cached kernel (about 0.9 s). Otherwise every kernel is
+loading of each cached kernel (0.5 to 0.7 s). Otherwise every kernel is
 ``numba.njit(cache=True, nogil=True)`` of the function, as it always was.
+(The AOT variants hold the GIL: the package calls no kernel from threads.)
 
 The extension embeds a manifest: the SHA-256 of every source file its code
 comes from (the build script included) and of numba's version file, numpy's
@@ -57,7 +58,6 @@ __all__ = [
     "kernel",
     "manifest_problem",
     "source_hashes",
-    "variants_of",
 ]
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -471,9 +471,3 @@ def jit_of(k: Any) -> Any:
     """
     info = getattr(k, "_moveability_kernel", None)
     return k if info is None else _dispatcher(info)
-
-
-def variants_of(k: Any) -> int:
-    """How many AOT variants a kernel has (0 in JIT mode)."""
-    info = getattr(k, "_moveability_kernel", None)
-    return 0 if info is None else len(info.variants)
