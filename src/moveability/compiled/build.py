@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import ast
 import importlib
+import inspect
 import json
 import os
 import sys
@@ -384,6 +385,15 @@ def build(force: bool = False, generic: bool = False) -> str:
                 continue
             fn = jit_of(KERNELS[name]).py_func
             fn._moveability_name = name
+            n_params = len(inspect.signature(fn).parameters)
+            if any(len(specs) != n_params for specs in arg_lists):
+                # (cheaper said now than found by numba's typing, one build each)
+                print(
+                    f"moveability: kernel {name} left to the JIT: it takes {n_params}"
+                    " arguments, not those of EXPORTS",
+                    file=sys.stderr,
+                )
+                continue
             for i, specs in enumerate(arg_lists):
                 symbol = f"{name.replace('.', '__')}__{i}"
                 argtypes = tuple(numba_type(s) for s in specs)
