@@ -156,7 +156,7 @@ def test_read_only_arguments_are_copied_when_not_contiguous_and_outputs_never():
     n = 40
     starts = rng.integers(0, n, size=6)
     source = np.where(rng.random(n) < 0.3, 0, -1)
-    pred = rng.integers(-1, n, size=n).astype(np.int32)
+    pred = rng.integers(-1, n, size=n)
     expected = np.zeros(n, dtype=bool)
     assert _walk_back.match(expected, starts, source, pred) == 0
     _walk_back(expected, starts, source, pred)

@@ -12,9 +12,9 @@ moveability`` (and a command that needs little, such as ``moveability
 from __future__ import annotations
 
 import importlib
-from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
 
+from ._version import __version__
 from .errors import (
     IncompatibleTreesError,
     InputError,
@@ -38,10 +38,6 @@ if TYPE_CHECKING:
     from .hypertree.tree import HyperTree, Leaves, load
     from .mechanisms.registry import from_spec, load_spec
 
-try:
-    __version__ = version("moveability")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree
-    __version__ = "0.0.0"
 
 #: where each lazily imported public name lives
 _LAZY: dict[str, str] = {

@@ -299,3 +299,33 @@ def test_save_and_load_give_the_same_answers(tmp_path):
     assert again.to_dict() == result.to_dict()
     pts = np.random.default_rng(0).uniform(*m.bounds, (50, 2))
     assert again.locate(pts) == result.locate(pts)
+
+
+def test_leaf_table_from_the_build_by_level_or_by_location(monkeypatch):
+    """The sheet table of the leaves is gathered from the build's tables level by
+    level; when a level's cells are not its leaves in key order, they are located
+    one by one: the same table either way."""
+    from dataclasses import fields
+
+    import moveability.analysis.result as result_module
+
+    captured = []
+    original = result_module._leaf_table
+
+    def capture(mechanism, tree, kept):
+        captured.append((mechanism, tree, list(kept)))
+        return original(mechanism, tree, kept)
+
+    monkeypatch.setattr(result_module, "_leaf_table", capture)
+    analyze(FiveBar(*PAPER), precision=0.2, resolve=False)
+    mechanism, tree, kept = captured[0]
+    fast = original(mechanism, tree, kept)
+    rng = np.random.default_rng(7)
+    shuffled = []
+    for cell_lo, cell_hi, table in kept:
+        order = rng.permutation(len(cell_lo))
+        shuffled.append((cell_lo[order], cell_hi[order], table.take(order)))
+    located = original(mechanism, tree, shuffled)
+    assert any(len(c) > 1 for c, _, _ in kept)
+    for f in fields(fast):
+        np.testing.assert_array_equal(getattr(fast, f.name), getattr(located, f.name), f.name)

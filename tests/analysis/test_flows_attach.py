@@ -21,13 +21,14 @@ def random_tree(rng: np.random.Generator, periodic: tuple[int, ...]) -> HyperTre
     return HyperTree.from_array(values, periodic=periodic)
 
 
-def reference_sides(tree: HyperTree) -> list[set[tuple[int, int]]]:
+def reference_sides(tree: HyperTree) -> list[list[tuple[int, int]]]:
     """Per direction (+x, -x, +y, -y): the pairs (a, b) of face-adjacent leaves
-    (not OUT) with b across a's face, from the leaves' cells on the finest grid."""
+    (not OUT) with b across a's face, from the leaves' cells on the finest grid;
+    the adjacency's pairs as given, then reversed, each in its order."""
     pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=1)
     sizes = tree.layout.cell_sizes(tree.levels)
     extent = 1 << np.asarray(tree.max_depth)
-    out: list[set[tuple[int, int]]] = [set() for _ in range(4)]
+    out: list[list[tuple[int, int]]] = [[] for _ in range(4)]
     for a, b in pairs.tolist() + pairs[:, ::-1].tolist():
         for axis in range(2):
             end_a = tree.anchors[a, axis] + sizes[a, axis]
@@ -35,9 +36,9 @@ def reference_sides(tree: HyperTree) -> list[set[tuple[int, int]]]:
             if axis in tree.periodic:
                 end_a, end_b = end_a % extent[axis], end_b % extent[axis]
             if end_a == tree.anchors[b, axis]:
-                out[2 * axis].add((a, b))
+                out[2 * axis].append((a, b))
             if tree.anchors[a, axis] == end_b:
-                out[2 * axis + 1].add((a, b))
+                out[2 * axis + 1].append((a, b))
     return out
 
 
@@ -90,7 +91,7 @@ def test_face_sides_and_attachment_match_references(seed: int) -> None:
     rng = np.random.default_rng(seed)
     tree = random_tree(rng, (1,) if seed % 2 else ())
     neighbours = face_neighbours(tree)
-    assert [set(map(tuple, p.tolist())) for p in neighbours.pairs] == reference_sides(tree)
+    assert [list(map(tuple, p.tolist())) for p in neighbours.pairs] == reference_sides(tree)
     n, n_post, slots, n_flows = len(tree), 2, 2, 5
     done = rng.random((n, n_post)) < 0.3
     done[tree.status == OUT] = True

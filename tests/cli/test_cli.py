@@ -153,6 +153,13 @@ def test_help_and_version():
         assert str(options.DEFAULT_PRECISION) in sub.stdout
     version = run(["--version"])
     assert version.exit_code == 0 and "moveability" in version.stdout
+    # the version written once in the package is the one installed
+    import importlib.metadata
+
+    import moveability
+
+    installed = importlib.metadata.version("moveability")
+    assert moveability.__version__ == installed and installed in version.stdout
 
 
 def test_default_precision(fake, spec):

@@ -534,7 +534,8 @@ def test_adjacency_matches_brute_force(max_depth, merge):
 def test_refined_adjacency_matches_a_fresh_one(max_depth):
     """Pairs of a refined tree from the coarser tree's pairs: equal to the adjacency
     computed afresh, whatever the statuses, periodic axes and connectivity, and
-    after several rounds of refinement (as the resolution of an analysis does)."""
+    after several rounds of refinement (as the resolution of an analysis does);
+    the known pairs merged when sorted, sorted again when not."""
     from moveability.hypertree.topology import refined_adjacency
 
     rng = np.random.default_rng([len(max_depth), *max_depth, 23])
@@ -568,8 +569,14 @@ def test_refined_adjacency_matches_a_fresh_one(max_depth):
             got = refined_adjacency(
                 finer, tree, pairs, old_index, status=status, connectivity=c
             )
+            # the known pairs in another order: sorted again, not merged
+            shuffled = refined_adjacency(
+                finer, tree, pairs[rng.permutation(len(pairs))], old_index,
+                status=status, connectivity=c,
+            )  # fmt: skip
             pairs = adjacency(finer, status=status, connectivity=c)
             np.testing.assert_array_equal(got, pairs, err_msg=f"{periodic}, c={c}")
+            np.testing.assert_array_equal(shuffled, pairs, err_msg=f"{periodic}, c={c}")
             tree = finer
 
 

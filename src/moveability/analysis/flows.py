@@ -148,6 +148,25 @@ def _face_sides(
     in that order."""
     m = pairs.shape[0]
     k = anchors.shape[1]
+    # per pair, bit d: b lies across a's side d (as given); reversed, the sides of
+    # each axis swap. One pass over the leaves' cells, then two over the bits.
+    sides = np.zeros(m, dtype=np.int64)
+    for e in range(m):
+        a = pairs[e, 0]
+        b = pairs[e, 1]
+        bits = 0
+        for axis in range(k):
+            end_a = ends[a, axis]
+            end_b = ends[b, axis]
+            if periodic[axis]:
+                end_a = end_a % extent[axis]
+                end_b = end_b % extent[axis]
+            # +e_axis: b starts where a ends; -e_axis: a starts where b ends
+            if end_a == anchors[b, axis]:
+                bits |= 1 << (2 * axis)
+            if anchors[a, axis] == end_b:
+                bits |= 1 << (2 * axis + 1)
+        sides[e] = bits
     count = np.zeros(2 * k, dtype=np.int64)
     ptr = np.zeros(2 * k + 1, dtype=np.int64)
     flat = np.empty((0, 2), dtype=np.int64)
@@ -159,24 +178,19 @@ def _face_sides(
             count[:] = 0
         for half in range(2):
             for e in range(m):
+                bits = sides[e]
+                if not bits:
+                    continue
                 a = pairs[e, half]
                 b = pairs[e, 1 - half]
-                for axis in range(k):
-                    end_a = ends[a, axis]
-                    end_b = ends[b, axis]
-                    if periodic[axis]:
-                        end_a = end_a % extent[axis]
-                        end_b = end_b % extent[axis]
-                    for d in (2 * axis, 2 * axis + 1):
-                        # +e_axis: b starts where a ends; -e_axis: a starts where b ends
-                        plus = end_a == anchors[b, axis]
-                        minus = anchors[a, axis] == end_b
-                        if not (plus if d == 2 * axis else minus):
-                            continue
-                        if step == 1:
-                            flat[ptr[d] + count[d], 0] = a
-                            flat[ptr[d] + count[d], 1] = b
-                        count[d] += 1
+                for d in range(2 * k):
+                    # reversed, side 2 axis and 2 axis + 1 trade places
+                    if not (bits >> (d ^ half)) & 1:
+                        continue
+                    if step == 1:
+                        flat[ptr[d] + count[d], 0] = a
+                        flat[ptr[d] + count[d], 1] = b
+                    count[d] += 1
     return flat, ptr
 
 

@@ -86,8 +86,7 @@ class RegionGraph:
 
 @kernel
 def _certain_edges(
-    a: NDArray[np.int64],
-    b: NDArray[np.int64],
+    pairs: NDArray[np.int64],
     sign: NDArray[np.int8],
     regular_in: NDArray[np.bool_],
     certified: NDArray[np.bool_],
@@ -107,8 +106,8 @@ def _certain_edges(
     n, n_post = sign.shape
     k = 0
     for p in range(n_post):
-        for t in range(a.size):
-            i, j = a[t], b[t]
+        for t in range(pairs.shape[0]):
+            i, j = pairs[t, 0], pairs[t, 1]
             if sign[i, p] != sign[j, p]:
                 continue
             ok = (regular_in[i, p] and certified[j, p]) or (certified[i, p] and regular_in[j, p])
@@ -155,8 +154,7 @@ def _pieces_meet(
 
 @kernel
 def _possible_labels(
-    a: NDArray[np.int64],
-    b: NDArray[np.int64],
+    pairs: NDArray[np.int64],
     alive: NDArray[np.bool_],
     has: NDArray[np.bool_],
     lo: NDArray[np.float64],
@@ -169,8 +167,8 @@ def _possible_labels(
 ) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
     """Components of the possible graph of one sign, joined on the fly (no edge list).
 
-    Sub-node ``(leaf * P + posture) * slots + slot``. Touching leaves ``a``, ``b``
-    join the same posture's sub-nodes that exist (``has``: (P, slots, n)) and may
+    Sub-node ``(leaf * P + posture) * slots + slot``. Touching leaves (the rows of
+    ``pairs``) join the same posture's sub-nodes that exist (``has``: (P, slots, n)) and may
     hold a configuration (``alive``: (n, P)) where their pieces overlap; within a
     leaf, the postures of each pair ``pq`` join where ``same_leaf`` says they
     differ only on folding legs. Labels on the ``taken`` sub-nodes, numbered by
@@ -178,8 +176,8 @@ def _possible_labels(
     n, n_post = alive.shape
     slots = has.shape[1]
     parent = np.arange(n * n_post * slots)
-    for t in range(a.size):
-        i, j = a[t], b[t]
+    for t in range(pairs.shape[0]):
+        i, j = pairs[t, 0], pairs[t, 1]
         for p in range(n_post):
             if not (alive[i, p] and alive[j, p]):
                 continue
@@ -281,7 +279,6 @@ def region_graph(
     n, n_post = table.status.shape
     if limits is None:
         limits = tuple(JointLimit.unlimited() for _ in range(table.angles_lo.shape[2]))
-    a, b = pairs[:, 0], pairs[:, 1]
     group = table.group if cross_serial else np.zeros_like(table.group)
     certified = (table.status == IN) | group
     # legs whose branches may meet in a leaf; none may be crossed without serial ones
@@ -296,14 +293,15 @@ def region_graph(
         if post_pairs
         else np.zeros((0, n), dtype=bool)
     )
-    pa, pb = np.ascontiguousarray(a, dtype=np.int64), np.ascontiguousarray(b, dtype=np.int64)
+    # the (m, 2) pairs as they are: no copy of their columns
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     contact = (
         np.zeros(0, dtype=bool)
         if reachable_contact is None
         else np.ascontiguousarray(reachable_contact, dtype=bool)
     )
     args = (
-        pa, pb, np.ascontiguousarray(table.sign), np.ascontiguousarray(table.status == IN),
+        pairs, np.ascontiguousarray(table.sign), np.ascontiguousarray(table.status == IN),
         np.ascontiguousarray(certified), np.ascontiguousarray(group), contact,
         reachable_contact is not None, pq, same_leaf,
     )  # fmt: skip
@@ -325,25 +323,28 @@ def region_graph(
     n_legs = table.angles_lo.shape[2]
     split = split_legs(limits)
     slots = 1 << len(split)
-    pieces = [
-        joint_pieces(table.angles_lo[:, :, i], table.angles_hi[:, :, i], limits[i])
-        for i in range(n_legs)
-    ]  # per leg: (lo, hi, ok) arrays of shape (2, n, P)
     combos = [
         [(c >> split.index(i)) & 1 if i in split else 0 for i in range(n_legs)]
         for c in range(slots)
     ]
+    # per leg, the two pieces' bounds written straight into the arrays of the
+    # compiled pass, (legs, 2, n, P), and where each piece exists
+    piece_lo = np.empty((n_legs, 2, n, n_post))
+    piece_hi = np.empty((n_legs, 2, n, n_post))
+    piece_ok = []
+    for i in range(n_legs):
+        piece_lo[i], piece_hi[i], ok = joint_pieces(
+            table.angles_lo[:, :, i], table.angles_hi[:, :, i], limits[i]
+        )
+        piece_ok.append(ok)
 
     # has[p][c]: the node of posture p has sub-node c (a piece for every leg)
     has = np.ones((n_post, slots, n), dtype=bool)
     for p in range(n_post):
         for c in range(slots):
             for i, k in enumerate(combos[c]):
-                has[p, c] &= pieces[i][2][k][:, p]
+                has[p, c] &= piece_ok[i][k][:, p]
 
-    # pieces of every leg, stacked for the compiled pass: (legs, 2, n, P)
-    piece_lo = np.ascontiguousarray(np.stack([piece[0] for piece in pieces]))
-    piece_hi = np.ascontiguousarray(np.stack([piece[1] for piece in pieces]))
     combo = np.asarray(combos, dtype=np.int64).reshape(slots, n_legs)
     has_c = np.ascontiguousarray(has)
     possible = np.full((2, n * n_post * slots), -1, dtype=np.int64)
@@ -352,7 +353,7 @@ def region_graph(
         alive = np.ascontiguousarray(table.may_hold(s))
         taken = alive[:, :, None] & has.transpose(2, 0, 1)
         labels, count = _possible_labels(
-            pa, pb, alive, has_c, piece_lo, piece_hi, combo, pq, same_leaf,
+            pairs, alive, has_c, piece_lo, piece_hi, combo, pq, same_leaf,
             np.ascontiguousarray(taken.ravel()), _TOL,
         )  # fmt: skip
         possible[row] = labels

@@ -438,8 +438,19 @@ def _leaf_table(
     source = np.full(n, -1, dtype=np.intp)
     tables = [table for _, _, table in kept]
     offsets = np.cumsum([0] + [len(t.status) for t in tables])
+    # the build classifies level c's cells in key order (children follow their
+    # parents' order): they are the leaves of level c, in order, when the boxes
+    # agree; located one by one otherwise
+    by_level = np.argsort(tree.levels, kind="stable")
+    starts = np.searchsorted(tree.levels[by_level], np.arange(len(kept) + 1))
     for c, (cell_lo, cell_hi, _) in enumerate(kept):
         if not len(cell_lo):
+            continue
+        at = by_level[starts[c] : starts[c + 1]]
+        if at.size == len(cell_lo) and (
+            np.array_equal(leaves.lo[at], cell_lo) and np.array_equal(leaves.hi[at], cell_hi)
+        ):
+            source[at] = offsets[c] + np.arange(at.size)
             continue
         _, leaf = locate(tree, 0.5 * (cell_lo + cell_hi))
         ok = leaf >= 0
@@ -530,21 +541,11 @@ def _reachable_contact(
 
 
 @kernel
-def _flow_labels(
-    label: NDArray[np.int64], pred: NDArray[np.int32], order: NDArray[np.intp]
-) -> None:  # pragma: no cover - compiled
-    """``label[i] = label[pred[i]]`` for the leaves of ``order``, in that order."""
-    for t in range(order.size):
-        i = order[t]
-        label[i] = label[pred[i]]
-
-
-@kernel
 def _walk_back(
     out: NDArray[np.bool_],
     starts: NDArray[np.intp],
     source: NDArray[np.int64],
-    pred: NDArray[np.int32],
+    pred: NDArray[np.int64],
 ) -> None:  # pragma: no cover - compiled
     """Mark each start and its predecessors up to a leaf of a part (included)."""
     n = out.size
@@ -560,27 +561,90 @@ def _walk_back(
 
 
 @kernel
-def _chain_edges(
-    pairs: NDArray[np.intp], through: NDArray[np.bool_], seeds: NDArray[np.intp], n: int
-) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
-    """Rows and columns of the edges of :func:`_necks`' graph: the pairs whose two
-    leaves are ``through`` (in the order of ``pairs``), then ``(n, seed)``."""
+def _chain_search(
+    pairs: NDArray[np.intp],
+    through: NDArray[np.bool_],
+    seeds: NDArray[np.intp],
+    source: NDArray[np.int64],
+) -> tuple[
+    NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
+]:  # pragma: no cover - compiled
+    """The breadth-first search of :func:`_necks`, from every seed at once, along
+    the pairs whose two leaves are ``through``.
+
+    Returns each leaf's hops from the nearest seed (inf where none reaches it),
+    its predecessor on a shortest chain (-1 for a seed or an unreached leaf),
+    its label (the part, ``source``, of the seed its chain starts from; -1 where
+    unreached) and the two columns of the pairs searched whose leaves have
+    two labels (in the order of ``pairs``): where chains from two parts meet.
+    A leaf's chain goes on through its neighbour one step nearer with the
+    largest index, whose label it takes."""
+    n = through.size
+    degree = np.zeros(n + 1, dtype=np.int64)
     m = 0
     for t in range(pairs.shape[0]):
-        if through[pairs[t, 0]] and through[pairs[t, 1]]:
+        i, j = pairs[t, 0], pairs[t, 1]
+        if through[i] and through[j]:
+            degree[i + 1] += 1
+            degree[j + 1] += 1
             m += 1
-    rows = np.empty(m + seeds.size, dtype=np.int64)
-    cols = np.empty(m + seeds.size, dtype=np.int64)
+    for i in range(n):
+        degree[i + 1] += degree[i]
+    fill = degree[:-1].copy()
+    neighbour = np.empty(2 * m, dtype=np.int64)
+    a = np.empty(m, dtype=np.int64)
+    b = np.empty(m, dtype=np.int64)
     k = 0
     for t in range(pairs.shape[0]):
-        if through[pairs[t, 0]] and through[pairs[t, 1]]:
-            rows[k] = pairs[t, 0]
-            cols[k] = pairs[t, 1]
+        i, j = pairs[t, 0], pairs[t, 1]
+        if through[i] and through[j]:
+            a[k], b[k] = i, j
             k += 1
+            neighbour[fill[i]] = j
+            fill[i] += 1
+            neighbour[fill[j]] = i
+            fill[j] += 1
+    hops = np.full(n, np.inf)
+    pred = np.full(n, -1, dtype=np.int64)
+    label = np.full(n, -1, dtype=np.int64)
+    queue = np.empty(n, dtype=np.int64)
+    tail = 0
     for t in range(seeds.size):
-        rows[m + t] = n
-        cols[m + t] = seeds[t]
-    return rows, cols
+        i = seeds[t]
+        if hops[i] == np.inf:
+            hops[i] = 0.0
+            label[i] = source[i]
+            queue[tail] = i
+            tail += 1
+    head = 0
+    while head < tail:
+        v = queue[head]
+        head += 1
+        for u in range(degree[v], degree[v + 1]):
+            w = neighbour[u]
+            if hops[w] == np.inf:
+                hops[w] = hops[v] + 1.0
+                queue[tail] = w
+                tail += 1
+    # each leaf's predecessor: its neighbour one step nearer with the largest
+    # index; labels in the order reached (a predecessor is reached first)
+    for t in range(tail):
+        w = queue[t]
+        if hops[w] == 0.0:
+            continue
+        for u in range(degree[w], degree[w + 1]):
+            v = neighbour[u]
+            if hops[v] == hops[w] - 1.0 and v > pred[w]:
+                pred[w] = v
+        label[w] = label[pred[w]]
+    # the pairs searched whose leaves have two labels: where chains meet
+    k = 0
+    for t in range(m):
+        la, lb = label[a[t]], label[b[t]]
+        if la >= 0 and lb >= 0 and la != lb:
+            a[k], b[k] = a[t], b[t]
+            k += 1
+    return hops, pred, label, a[:k], b[:k]
 
 
 @kernel
@@ -609,35 +673,20 @@ def _necks(
     joins the two parts through them. For each pair of parts the chains within
     ``slack`` leaves of the shortest are kept, and their gap leaves returned.
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import shortest_path
-
     n = gap.size
     out = np.zeros(n, dtype=bool)
     seeds = np.flatnonzero(source >= 0)
     through = gap | (source >= 0)
-    # the pairs of leaves that both lie on some chain, then an edge from a node
-    # n to every seed
-    rows, cols = _chain_edges(pairs, through, seeds, n)
-    a, b = rows[: rows.size - seeds.size], cols[: cols.size - seeds.size]
-    graph = coo_matrix(
-        (np.ones(rows.size, dtype=np.int8), (rows, cols)), shape=(n + 1, n + 1)
-    ).tocsr()
-    dist, pred = shortest_path(
-        graph, directed=False, unweighted=True, indices=n, return_predecessors=True
+    # each leaf labelled with its nearest part, along a shortest chain; the
+    # touching leaves of two labels
+    hops, pred, label, a, b = _chain_search(
+        np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2),
+        through,
+        seeds,
+        np.ascontiguousarray(source, dtype=np.int64),
     )
-    reached = np.isfinite(dist[:n])
-    hops = np.where(reached, dist[:n] - 1.0, np.inf)
-    label = np.where(source >= 0, source, -1)
-    # labels flow from the seeds outward, one distance at a time (a leaf's
-    # predecessor is one step nearer: labelled before it in this order)
-    order = np.flatnonzero(reached & (source < 0))
-    order = order[np.argsort(hops[order], kind="stable")]
-    _flow_labels(label, pred, order)
-    meet = (label[a] >= 0) & (label[b] >= 0) & (label[a] != label[b])
-    if not meet.any():
+    if not a.size:
         return out
-    a, b = a[meet], b[meet]
     length = hops[a] + hops[b]
     low, high = np.minimum(label[a], label[b]), np.maximum(label[a], label[b])
     pair_key = low * (int(label.max()) + 1) + high

@@ -118,20 +118,21 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.hypertree._kernels._sorted_pairs": [
         (array(I8, out=True), array(I8, out=True), I8)
     ],
+    "moveability.hypertree._kernels._in_order": [(array(I8, 2),)],
+    "moveability.hypertree._kernels._merged_pairs": [(array(I8, 2), array(I8, 2))],
     "moveability.hypertree._kernels.remap_pairs": [
         (array(I8, 2), array(I8), array(B1, out=True))
     ],
     "moveability.hypertree._kernels.edge_labels": [(I8, array(I8), array(I8), array(B1))],
     "moveability.analysis.regions._certain_edges": [
         (
-            array(I8), array(I8), array("int8", 2), array(B1, 2), array(B1, 2),
-            array(B1, 2), array(B1), B1, array(I8, 2), array(B1, 2),
-            array(I8, 2, out=True), B1,
+            array(I8, 2), array("int8", 2), array(B1, 2), array(B1, 2), array(B1, 2),
+            array(B1), B1, array(I8, 2), array(B1, 2), array(I8, 2, out=True), B1,
         )
     ],
     "moveability.analysis.regions._possible_labels": [
         (
-            array(I8), array(I8), array(B1, 2), array(B1, 3), array(F8, 4), array(F8, 4),
+            array(I8, 2), array(B1, 2), array(B1, 3), array(F8, 4), array(F8, 4),
             array(I8, 2), array(I8, 2), array(B1, 2), array(B1), F8,
         )
     ],
@@ -150,13 +151,12 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
             array(F8, 4), array(B1, 2),
         )
     ],
-    "moveability.analysis.result._flow_labels": [
-        (array(I8, out=True), array("int32"), array(I8))
-    ],
     "moveability.analysis.result._walk_back": [
-        (array(B1, out=True), array(I8), array(I8), array("int32"))
+        (array(B1, out=True), array(I8), array(I8), array(I8))
     ],
-    "moveability.analysis.result._chain_edges": [(array(I8, 2), array(B1), array(I8), I8)],
+    "moveability.analysis.result._chain_search": [
+        (array(I8, 2), array(B1), array(I8), array(I8))
+    ],
     "moveability.analysis.result._grown": [(array(B1), array(I8, 2))],
 }
 

@@ -263,10 +263,29 @@ def adjacent_pairs(
     src = every if sources is None else sources
     new = every if fresh is None else fresh
     a, b = _pairs(keys, levels, chosen, *args, directions, src, new)
-    if known is not None and known.size:
-        a = np.concatenate([a, known[:, 0]])
-        b = np.concatenate([b, known[:, 1]])
-    return _sorted_pairs(a, b, n)
+    if known is None or not known.size:
+        return _sorted_pairs(a, b, n)
+    known = np.ascontiguousarray(known, dtype=np.int64)
+    if not _in_order(known):
+        return _sorted_pairs(np.concatenate([a, known[:, 0]]), np.concatenate([b, known[:, 1]]), n)
+    # the known pairs are sorted (a refined tree keeps its kept leaves' order, so
+    # an adjacency's pairs stay sorted) and none is found again (each found pair
+    # has a fresh leaf): a merge
+    return _merged_pairs(_sorted_pairs(a, b, n), known)
+
+
+@kernel
+def _in_order(pairs: NDArray[np.int64]) -> bool:  # pragma: no cover - compiled
+    """Whether pairs ``i < j`` are in strictly increasing order."""
+    for t in range(pairs.shape[0]):
+        if pairs[t, 0] >= pairs[t, 1]:
+            return False
+        if t and (
+            pairs[t, 0] < pairs[t - 1, 0]
+            or (pairs[t, 0] == pairs[t - 1, 0] and pairs[t, 1] <= pairs[t - 1, 1])
+        ):
+            return False
+    return True
 
 
 @kernel
@@ -296,6 +315,34 @@ def _sorted_pairs(
                 out[v + 1, 1] = out[v, 1]
                 v -= 1
             out[v + 1, 1] = value
+    return out
+
+
+@kernel
+def _merged_pairs(
+    first: NDArray[np.int64], second: NDArray[np.int64]
+) -> NDArray[np.int64]:  # pragma: no cover - compiled
+    """Two lists of pairs, each in sorted order and with no pair in both, merged
+    into one in sorted order."""
+    m1, m2 = first.shape[0], second.shape[0]
+    out = np.empty((m1 + m2, 2), dtype=np.int64)
+    s = t = 0
+    for u in range(m1 + m2):
+        take_first = t >= m2 or (
+            s < m1
+            and (
+                first[s, 0] < second[t, 0]
+                or (first[s, 0] == second[t, 0] and first[s, 1] < second[t, 1])
+            )
+        )
+        if take_first:
+            out[u, 0] = first[s, 0]
+            out[u, 1] = first[s, 1]
+            s += 1
+        else:
+            out[u, 0] = second[t, 0]
+            out[u, 1] = second[t, 1]
+            t += 1
     return out
 
 
