@@ -5,23 +5,30 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: test demo bench lint clean
+.PHONY: test demo bench lint kernels clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e ".[all,test]"
+	$(PY) -m moveability.compiled.build
 	touch $(STAMP)
+
+# the ahead-of-time compiled kernels, rebuilt when a kernel's source changed (about
+# a minute; without them, or when stale, numba's JIT runs the kernels: see
+# src/moveability/compiled/__init__.py)
+kernels: $(STAMP)
+	$(PY) -m moveability.compiled.build
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks examples
 	$(VENV)/bin/mypy
 
 # one worker per core; a test file stays on one worker (module fixtures, README order)
-test: lint
+test: lint kernels
 	$(VENV)/bin/pytest -n auto --dist loadfile
 
-demo: $(STAMP)
+demo: kernels
 	$(PY) examples/demo.py
 
 bench: $(STAMP)
@@ -36,3 +43,4 @@ bench: $(STAMP)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache .hypothesis
+	rm -f src/moveability/compiled/_aot.*

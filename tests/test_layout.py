@@ -8,7 +8,7 @@ import ast
 import pathlib
 
 PACKAGE = pathlib.Path(__file__).parents[1] / "src" / "moveability"
-LAYERS = {"hypertree", "mechanisms", "analysis", "output", "sweep", "cli"}
+LAYERS = {"compiled", "hypertree", "mechanisms", "analysis", "output", "sweep", "cli"}
 ACCEPTED_CYCLES = [{"moveability.hypertree.tree", "moveability.hypertree.setops"}]
 
 

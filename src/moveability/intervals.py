@@ -24,9 +24,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from .compiled import kernel
 from .types import Array
 
 __all__ = [
@@ -72,7 +72,7 @@ _HUGE = _MAX / 2.0
 _TINY = 5e-324
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _below(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
     """``x`` moved down by ``|x| * rel + tiny``; a zero kept when ``keep_zero``."""
     if x != x or (keep_zero and x == 0.0):
@@ -88,13 +88,13 @@ def _below(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # prag
     return x - (abs(x) * rel + tiny)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _above(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
     """``x`` moved up by ``|x| * rel + tiny``; a zero kept when ``keep_zero``."""
     return -_below(-x, rel, tiny, keep_zero)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _widen(x: Array, rel: float, tiny: float, up: bool) -> Array:  # pragma: no cover
     """:func:`_below` (or :func:`_above`) of each element of a flat array."""
     out = np.empty_like(x)
@@ -103,7 +103,7 @@ def _widen(x: Array, rel: float, tiny: float, up: bool) -> Array:  # pragma: no 
     return out
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _sum_bounds(
     a: Array, b: Array, up: bool
 ) -> Array:  # pragma: no cover - compiled
@@ -139,7 +139,7 @@ def _rel(ulps: int) -> float:
 _REL_1 = _rel(1)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def next_below(x: float) -> float:  # pragma: no cover - compiled
     """A float at least one float below ``x`` (a few at most): the outward rounding of
     a lower bound, for compiled code.
@@ -175,7 +175,7 @@ def widen_up(x: ArrayLike, ulps: int = 1) -> Array:
     return _widen(flat, _rel(ulps), ulps * _TINY, True).reshape(shape)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _product_bounds(
     a_lo: Array, a_hi: Array, b_lo: Array, b_hi: Array
 ) -> tuple[Array, Array]:  # pragma: no cover - compiled
@@ -208,7 +208,7 @@ def _product_bounds(
     return out_lo, out_hi
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _down(x: float, keep_zero: bool) -> float:  # pragma: no cover - compiled
     """:func:`_below` by one ulp (or a few), inlined into the compiled interval
     helpers below (a call per element to a separately compiled function costs
@@ -219,13 +219,13 @@ def _down(x: float, keep_zero: bool) -> float:  # pragma: no cover - compiled
     return x if (x != x or (keep_zero and x == 0.0)) else y
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _up(x: float, keep_zero: bool) -> float:  # pragma: no cover - compiled
     """:func:`_above` by one ulp (or a few), inlined (see :func:`_down`)."""
     return -_down(-x, keep_zero)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def interval_mul(
     a_lo: float, a_hi: float, b_lo: float, b_hi: float
 ) -> tuple[float, float]:  # pragma: no cover - compiled
@@ -261,7 +261,7 @@ def interval_mul(
     return out_lo, out_hi
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def interval_add(
     a_lo: float, a_hi: float, b_lo: float, b_hi: float
 ) -> tuple[float, float]:  # pragma: no cover - compiled
@@ -269,7 +269,7 @@ def interval_add(
     return _down(a_lo + b_lo, True), _up(a_hi + b_hi, True)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def interval_sub(
     a_lo: float, a_hi: float, b_lo: float, b_hi: float
 ) -> tuple[float, float]:  # pragma: no cover - compiled
@@ -277,7 +277,7 @@ def interval_sub(
     return _down(a_lo + -b_hi, True), _up(a_hi + -b_lo, True)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def mul_into(
     a_lo: Array, a_hi: Array, b_lo: Array, b_hi: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -288,7 +288,7 @@ def mul_into(
         out_lo[i], out_hi[i] = interval_mul(a_lo[i], a_hi[i], b_lo[i], b_hi[i])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def add_into(
     a_lo: Array, a_hi: Array, b_lo: Array, b_hi: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -297,7 +297,7 @@ def add_into(
         out_lo[i], out_hi[i] = interval_add(a_lo[i], a_hi[i], b_lo[i], b_hi[i])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def sub_into(
     a_lo: Array, a_hi: Array, b_lo: Array, b_hi: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -306,7 +306,7 @@ def sub_into(
         out_lo[i], out_hi[i] = interval_sub(a_lo[i], a_hi[i], b_lo[i], b_hi[i])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _sum_bounds_one(a: Array, b: float, up: bool) -> Array:  # pragma: no cover - compiled
     """:func:`_sum_bounds` with one number ``b`` for every element (no broadcast copy)."""
     out = np.empty_like(a)
@@ -316,7 +316,7 @@ def _sum_bounds_one(a: Array, b: float, up: bool) -> Array:  # pragma: no cover 
     return out
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _product_bounds_one(
     a_lo: Array, a_hi: Array, b_lo: float, b_hi: float
 ) -> tuple[Array, Array]:  # pragma: no cover - compiled
@@ -514,7 +514,7 @@ def sqrt(x: IntervalLike) -> Interval:
     return Interval(np.maximum(lo, 0.0), hi)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _holds_angle(lo: float, hi: float, phase: float) -> bool:  # pragma: no cover - compiled
     """Whether ``[lo, hi]`` may contain an angle ``phase + 2 k pi`` (conservative)."""
     # the quotient's rounding error grows with |x|: the margin is relative
@@ -523,7 +523,7 @@ def _holds_angle(lo: float, hi: float, phase: float) -> bool:  # pragma: no cove
     return phase + k * _TWO_PI <= hi + tol
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _holds_angles(lo: Array, hi: Array, phase: Array) -> NDArray[np.bool_]:  # pragma: no cover
     out = np.empty(lo.size, dtype=np.bool_)
     for i in range(lo.size):
@@ -543,7 +543,7 @@ def may_contain_angle(x: Interval, phase: float | NDArray[np.float64]) -> NDArra
     return _holds_angles(lo, hi, ph).reshape(shape)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _trig_bounds(
     lo: Array, hi: Array, sine: bool, rel: float, tiny: float
 ) -> tuple[Array, Array]:  # pragma: no cover - compiled
@@ -603,7 +603,7 @@ def sin(x: IntervalLike) -> Interval:
     return _trig(as_interval(x), sine=True)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def point_sin_cos(a: float) -> tuple[float, float, float, float]:  # pragma: no cover
     """:func:`sin` and :func:`cos` of the interval ``[a, a]``, for compiled code:
     the steps of :func:`_trig_bounds` with ``lo = hi``, one libm call per function

@@ -5,9 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from .compiled import kernel
 from .errors import InvalidParameterError
 from .intervals import Interval, flat_arrays, next_below
 
@@ -174,7 +174,7 @@ def classify_angles(angles: Interval, lo: ArrayLike, hi: ArrayLike) -> NDArray[n
         return _classify(*flat).reshape(shape)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _shifted(a: float, turns: float) -> float:  # pragma: no cover - compiled
     """An enclosure's bound ``a`` moved ``turns`` turns: ``turns * 2 pi`` is enclosed in
     ``[turns * 2pi_lo, turns * 2pi_hi]`` and every rounding is widened outwards
@@ -183,7 +183,7 @@ def _shifted(a: float, turns: float) -> float:  # pragma: no cover - compiled
     return next_below(a + next_below(shift))
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _classify_one(a_lo: float, a_hi: float, lo: float, hi: float) -> int:  # pragma: no cover
     width = a_hi - a_lo
     # k turns bring the interval near [lo, lo + 2 pi); the tests below are sound for
@@ -203,7 +203,7 @@ def _classify_one(a_lo: float, a_hi: float, lo: float, hi: float) -> int:  # pra
     return OUTSIDE
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _classify(
     a_lo: NDArray[np.float64],
     a_hi: NDArray[np.float64],

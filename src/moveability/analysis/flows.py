@@ -38,9 +38,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
+from ..compiled import kernel
 from ..hypertree.status import BOUNDARY, IN
 from ..hypertree.topology import adjacency
 from ..hypertree.tree import HyperTree
@@ -134,7 +134,7 @@ def face_neighbours(tree: HyperTree, pairs: NDArray[np.intp] | None = None) -> F
     return FaceNeighbours(out, open_faces, (flat, ptr))
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _face_sides(
     pairs: NDArray[np.int64],
     anchors: NDArray[np.int64],
@@ -757,7 +757,7 @@ def into_corner(normals: Array) -> Array:
     return np.where((good & np.isfinite(dual).all(axis=1))[:, None], dual, total)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _ready(
     d: int,
     r: int,
@@ -775,7 +775,7 @@ def _ready(
     return True
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _propagate(
     slot_done: NDArray[np.bool_],
     bits: NDArray[np.uint64],
@@ -831,7 +831,7 @@ def _propagate(
                     break
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _dependencies(
     pairs: NDArray[np.int64],
     face_ptr: NDArray[np.int64],

@@ -25,9 +25,9 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
+from ..compiled import kernel
 from ..hypertree._kernels import edge_labels, relabel_roots, union_sets
 from ..hypertree.status import IN
 from ..limits import JointLimit
@@ -84,7 +84,7 @@ class RegionGraph:
         ).tocsr()
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _certain_edges(
     pairs: NDArray[np.int64],
     sign: NDArray[np.int8],
@@ -129,7 +129,7 @@ def _certain_edges(
     return k
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _pieces_meet(
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
@@ -152,7 +152,7 @@ def _pieces_meet(
     return True
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _possible_labels(
     pairs: NDArray[np.int64],
     alive: NDArray[np.bool_],

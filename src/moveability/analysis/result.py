@@ -14,9 +14,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from ..compiled import kernel
 from ..errors import InvalidParameterError, ResolutionError
 from ..hypertree.keys import MAX_KEY_BITS
 from ..hypertree.measurement import leaf_volumes, locate
@@ -540,7 +540,7 @@ def _reachable_contact(
     return out
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _walk_back(
     out: NDArray[np.bool_],
     starts: NDArray[np.intp],
@@ -560,7 +560,7 @@ def _walk_back(
                 break
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _chain_search(
     pairs: NDArray[np.intp],
     through: NDArray[np.bool_],
@@ -647,7 +647,7 @@ def _chain_search(
     return hops, pred, label, a[:k], b[:k]
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _grown(
     out: NDArray[np.bool_], pairs: NDArray[np.intp]
 ) -> NDArray[np.bool_]:  # pragma: no cover - compiled

@@ -8,11 +8,12 @@ these loops do the same per key, in one pass over memory.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
+from ..compiled import kernel
 
-@njit(cache=True, nogil=True)
+
+@kernel
 def encode(
     anchors: NDArray[np.int64], positions: NDArray[np.int64], depths: NDArray[np.int64]
 ) -> NDArray[np.uint64]:  # pragma: no cover - compiled
@@ -30,7 +31,7 @@ def encode(
     return out
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def decode(
     keys: NDArray[np.uint64], positions: NDArray[np.int64], depths: NDArray[np.int64]
 ) -> NDArray[np.int64]:  # pragma: no cover - compiled

@@ -10,15 +10,15 @@ components on the fly with a union-find, so no edge list is ever stored.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
+from ..compiled import kernel
 from .keys import KeyLayout
 
 __all__ = ["adjacent_pairs", "edge_components", "label_leaves", "remap_pairs"]
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _find(parent: NDArray[np.int64], i: int) -> int:  # pragma: no cover - compiled
     while parent[i] != i:
         parent[i] = parent[parent[i]]
@@ -26,7 +26,7 @@ def _find(parent: NDArray[np.int64], i: int) -> int:  # pragma: no cover - compi
     return i
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def union_sets(parent: NDArray[np.int64], i: int, j: int) -> None:  # pragma: no cover - compiled
     """Join the sets of ``i`` and ``j``; the smaller root stays the root."""
     a = _find(parent, i)
@@ -38,7 +38,7 @@ def union_sets(parent: NDArray[np.int64], i: int, j: int) -> None:  # pragma: no
             parent[a] = b
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def relabel_roots(
     parent: NDArray[np.int64], taken: NDArray[np.bool_]
 ) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
@@ -58,7 +58,7 @@ def relabel_roots(
     return labels, count
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _gallop(keys: NDArray[np.uint64], target: np.uint64, start: int) -> int:  # pragma: no cover
     """Index of the last key <= target, searching outwards from ``start``."""
     n = keys.size
@@ -93,7 +93,7 @@ def _gallop(keys: NDArray[np.uint64], target: np.uint64, start: int) -> int:  # 
     return lo
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _neighbour_key(
     key: np.uint64,
     level: np.int64,
@@ -134,7 +134,7 @@ def _neighbour_key(
     return key, True
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _label(
     keys: NDArray[np.uint64],
     levels: NDArray[np.uint8],
@@ -166,7 +166,7 @@ def _label(
     return relabel_roots(parent, chosen)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _pairs(
     keys: NDArray[np.uint64],
     levels: NDArray[np.uint8],
@@ -274,7 +274,7 @@ def adjacent_pairs(
     return _merged_pairs(_sorted_pairs(a, b, n), known)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _in_order(pairs: NDArray[np.int64]) -> bool:  # pragma: no cover - compiled
     """Whether pairs ``i < j`` are in strictly increasing order."""
     for t in range(pairs.shape[0]):
@@ -288,7 +288,7 @@ def _in_order(pairs: NDArray[np.int64]) -> bool:  # pragma: no cover - compiled
     return True
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _sorted_pairs(
     a: NDArray[np.int64], b: NDArray[np.int64], n: int
 ) -> NDArray[np.int64]:  # pragma: no cover - compiled
@@ -318,7 +318,7 @@ def _sorted_pairs(
     return out
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _merged_pairs(
     first: NDArray[np.int64], second: NDArray[np.int64]
 ) -> NDArray[np.int64]:  # pragma: no cover - compiled
@@ -346,7 +346,7 @@ def _merged_pairs(
     return out
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def remap_pairs(
     pairs: NDArray[np.int64], new_of_old: NDArray[np.int64], sources: NDArray[np.bool_]
 ) -> NDArray[np.int64]:  # pragma: no cover - compiled
@@ -396,7 +396,7 @@ def label_leaves(
     return labels, int(count)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def edge_labels(
     n: int, a: NDArray[np.int64], b: NDArray[np.int64], taken: NDArray[np.bool_]
 ) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled

@@ -23,9 +23,9 @@ their phi, then of its sine (``intervals.cos`` and ``sin``).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
+from ..compiled import kernel
 from ..intervals import (
     add_into,
     interval_mul,
@@ -48,20 +48,20 @@ Slot = int | np.int64
 ROW_ITEMS = 6
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _up(x: float) -> float:  # pragma: no cover - compiled
     """An upper bound moved up as :func:`~moveability.intervals.next_below` moves a
     lower bound down (``intervals._above`` by one ulp: ``-_below(-x)``)."""
     return -next_below(-x)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _max(a: float, b: float) -> float:  # pragma: no cover - compiled
     """``np.maximum`` of two floats: NaN if either is, else ``a`` when ``a >= b``."""
     return a if (a >= b or a != a) else b
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
     """``np.minimum`` of two floats: NaN if either is, else ``a`` when ``a <= b``."""
     return a if (a <= b or a != a) else b
@@ -77,25 +77,25 @@ def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
 _CHUNK = 256
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _mul(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = slot ``a`` * slot ``b`` (the first ``w`` boxes)."""
     mul_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _add(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = slot ``a`` + slot ``b``."""
     add_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _sub(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = slot ``a`` - slot ``b``."""
     sub_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _scale(lo: Array, hi: Array, a: Slot, c: float, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = slot ``a`` * the number ``c`` (``Interval * float``)."""
     a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
@@ -103,7 +103,7 @@ def _scale(lo: Array, hi: Array, a: Slot, c: float, o: Slot, w: int) -> None:  #
         o_lo[j], o_hi[j] = interval_mul(a_lo[j], a_hi[j], c, c)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _shift(lo: Array, hi: Array, a: Slot, c: float, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = slot ``a`` - the number ``c`` (``Interval - float``)."""
     a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
@@ -111,7 +111,7 @@ def _shift(lo: Array, hi: Array, a: Slot, c: float, o: Slot, w: int) -> None:  #
         o_lo[j], o_hi[j] = interval_sub(a_lo[j], a_hi[j], c, c)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _negate(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = - slot ``a`` (exact)."""
     for j in range(w):
@@ -120,7 +120,7 @@ def _negate(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: 
         hi[o, j] = -a_lo
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _load(
     lo: Array,
     hi: Array,
@@ -147,7 +147,7 @@ def _load(
 _NONE, _TARGET = -1, -2
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _leg(
     lo: Array,
     hi: Array,
@@ -199,7 +199,7 @@ def _leg(
     _negate(lo, hi, partials + 2, partials + 2, w)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _det3(
     lo: Array, hi: Array, m: NDArray[np.int64], o: Slot, t: Slot, w: int
 ) -> None:  # pragma: no cover - compiled
@@ -235,7 +235,7 @@ _TEMP = 44  # 6 slots of scratch
 _SLOTS = 50
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def det_a_bounds(
     lo: Array, hi: Array, trig: Array, legs: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -301,7 +301,7 @@ def det_a_bounds(
             out_hi[s + j] = _min(s_hi[nat, j], s_hi[tot, j])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def row_bounds(
     lo: Array, hi: Array, trig: Array, legs: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -324,14 +324,14 @@ def row_bounds(
         out_hi[:, s : s + size] = s_hi[items:temp, :size]
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _reciprocal(x: float) -> float:  # pragma: no cover - compiled
     """``1.0 / x`` as numpy rounds it, an infinity of the zero's sign for a zero
     (compiled code would raise)."""
     return np.copysign(np.inf, x) if x == 0.0 else 1.0 / x
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def joint_gradient_bounds(
     lo: Array,
     hi: Array,
@@ -369,7 +369,7 @@ def joint_gradient_bounds(
         out_hi[:, s : s + size] = s_hi[row : row + 3, :size]
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def reach_bounds(
     lo: Array, hi: Array, trig: Array, leg: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled

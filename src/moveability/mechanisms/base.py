@@ -27,10 +27,10 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
 from .. import intervals as iv
+from ..compiled import kernel
 from ..errors import InvalidParameterError
 from ..intervals import Interval, add_into, mul_into, sub_into
 from ..limits import INSIDE, STRADDLES, JointLimit
@@ -202,7 +202,7 @@ def _compiled(
     return Interval(out_lo.reshape(shape), out_hi.reshape(shape))
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _det_chunk(
     a_lo: Array, a_hi: Array, out_lo: Array, out_hi: Array, t_lo: Array, t_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -238,7 +238,7 @@ def _det_chunk(
             add_into(out_lo, out_hi, t_lo[1], t_hi[1], out_lo, out_hi)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _det_bounds(
     lo: Any, hi: Any, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -260,7 +260,7 @@ def _det_bounds(
         _det_chunk(a_lo, a_hi, out_lo[s:e], out_hi[s:e], t_lo, t_hi)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _det_rate_bounds(
     lo: Any, hi: Any, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -284,7 +284,7 @@ def _det_rate_bounds(
         )
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _det_rate_bounds_at(
     lo: Any, hi: Any, at: NDArray[np.int64], out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -316,7 +316,7 @@ def _det_rate_bounds_at(
         )
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _det_rate_span(
     lo: Any,
     hi: Any,

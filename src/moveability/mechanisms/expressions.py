@@ -29,9 +29,9 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from .. import intervals as iv
+from ..compiled import kernel
 from ..intervals import Interval, point_sin_cos
 from ..types import Array
 
@@ -116,7 +116,7 @@ def points(values: Any) -> Interval:
     return out
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _point_trig(x: Array) -> tuple[Array, Array, Array, Array]:  # pragma: no cover - compiled
     """:func:`~moveability.intervals.point_sin_cos` of each element of ``x``."""
     n = x.size

@@ -42,9 +42,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
+from ..compiled import kernel
 from ..intervals import Interval, interval_add, interval_mul, interval_sub, point_sin_cos
 from ..types import Array
 
@@ -287,7 +287,7 @@ def trace(function: Callable[..., Any], k: int) -> Tape:
     )
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _max0(x: float) -> float:  # pragma: no cover - compiled
     """``np.maximum(x, 0.0)``: NaN kept, and ``x`` when equal."""
     return x if (x >= 0.0 or x != x) else 0.0
@@ -297,7 +297,7 @@ def _max0(x: float) -> float:  # pragma: no cover - compiled
 _BLOCK = 256
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _ops(code: NDArray[np.int64], r_lo: Array, r_hi: Array, n: int) -> None:  # pragma: no cover
     """The tape's operations over the first ``n`` columns of the registers."""
     for p in range(code.shape[0]):
@@ -331,7 +331,7 @@ def _ops(code: NDArray[np.int64], r_lo: Array, r_hi: Array, n: int) -> None:  # 
                 t_hi[e] = s_hi
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _run(
     code: NDArray[np.int64],
     const_lo: Array,
@@ -470,7 +470,7 @@ def trig_kinds(tape: Tape) -> NDArray[np.int64] | None:
     return np.array(kinds, dtype=np.int64)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _contract(
     code: NDArray[np.int64],
     const_lo: Array,
