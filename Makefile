@@ -31,7 +31,7 @@ test: lint kernels
 demo: kernels
 	$(PY) examples/demo.py
 
-bench: $(STAMP)
+bench: kernels
 	$(PY) benchmarks/bench_tree.py
 	$(PY) benchmarks/bench_analysis.py
 	$(PY) benchmarks/bench_mechanisms.py
