@@ -1,0 +1,583 @@
+"""Compiled interval enclosures of the five-bar and its RR legs: det A over boxes
+(with the branch forms of a known posture), the elbows over angle enclosures,
+the legs' reach and their fold flows.
+
+Each kernel computes what :class:`~.five_bar.FiveBar` and :class:`~.rr_leg.RRLeg`
+compute with :class:`~moveability.intervals.Interval` operations (kept there as
+the reference, the ``_..._intervals`` methods): the same operations on the same
+operands in the same order, each rounded outwards by the compiled primitives
+of :mod:`moveability.intervals` that the Interval operators apply element by
+element (``interval_mul``, ``interval_add``, ``interval_sub``, ``next_below``,
+and the steps of ``intervals._trig_bounds`` for a cosine or sine). The bounds
+are thus the same floats, bit for bit (tests/mechanisms/test_five_bar_kernels.py
+compares them on random boxes of every kind). The kernels run box by box, each
+quantity a pair of floats in registers: no array is allocated per operation and
+no Python runs between the operations.
+
+Two library functions are left to numpy, between the kernels: ``arccos`` and
+``arctan2``. numpy may evaluate them with its own vectorised code (SVML on
+AVX-512 machines), whose results differ from the C library's in the last bits,
+so the Interval code's ``np.arccos`` and ``np.arctan2`` are called on the same
+arrays of arguments as there (and ``np.cos``, ``np.sin`` of a box's direction
+from its centre, for the same reason). The cosines and sines of angle
+enclosures are compiled in :mod:`moveability.intervals` already
+(``_trig_bounds``): :func:`_trig` repeats its steps.
+
+A leg enters as the float array of :func:`leg_constants`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from ..intervals import (
+    _LIB_REL,
+    _LIB_TINY,
+    _PI_UP,
+    _TWO_PI,
+    _below,
+    _holds_angle,
+    interval_add,
+    interval_mul,
+    interval_sub,
+    next_below,
+)
+from ..types import Array
+
+__all__ = [
+    "det_a_bounds",
+    "fold_rate_bounds",
+    "fold_terms_finish",
+    "fold_terms_prepare",
+    "knee_bounds",
+    "reach_finish",
+    "reach_prepare",
+]
+
+# the entries of a leg's constants (see RRLeg._constants): its base and lengths,
+# then the Interval constants of branch_det, _alpha, reach and _fold_terms
+(
+    BASE_X, BASE_Y, A, A2, B2, FOUR_A2, TOP, SHIFT_LO, SHIFT_HI, K_LO, K_HI, TWO_A,
+    STAR_LO, STAR_HI, G_MIN, K_POSITIVE, OUT_LO, OUT_HI, IN_LO, IN_HI, SLOPE_LO, SLOPE_HI,
+    N_CONSTANTS,
+) = range(23)  # fmt: skip
+
+#: the reach codes of mechanisms.base (REGULAR, FOLD_OUTER, FOLD_INNER, REACH_OUT,
+#: REACH_UNKNOWN), passed in by the caller
+_CODES = 5
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _up(x: float) -> float:  # pragma: no cover - compiled
+    """An upper bound moved up as :func:`~moveability.intervals.next_below` moves a
+    lower bound down (``intervals._above`` by one ulp: ``-_below(-x)``)."""
+    return -next_below(-x)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _lib_down(x: float) -> float:  # pragma: no cover - compiled
+    """``widen_down(x, _LIB_ULPS)``: a library function's lower bound."""
+    return _below(x, _LIB_REL, _LIB_TINY, False)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _lib_up(x: float) -> float:  # pragma: no cover - compiled
+    """``widen_up(x, _LIB_ULPS)``."""
+    return -_below(-x, _LIB_REL, _LIB_TINY, False)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _max(a: float, b: float) -> float:  # pragma: no cover - compiled
+    """``np.maximum`` of two floats: NaN if either is, else ``a`` when ``a >= b``."""
+    if a != a or b != b:
+        return np.nan
+    return a if a >= b else b
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
+    """``np.minimum`` of two floats: NaN if either is, else ``a`` when ``a <= b``."""
+    if a != a or b != b:
+        return np.nan
+    return a if a <= b else b
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _reciprocal(x: float) -> float:  # pragma: no cover - compiled
+    """``1.0 / x`` as numpy rounds it, an infinity of the zero's sign for a zero
+    (compiled code would raise)."""
+    return np.copysign(np.inf, x) if x == 0.0 else 1.0 / x
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _div(
+    a_lo: float, a_hi: float, b_lo: float, b_hi: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``Interval.__truediv__``: the product with ``[1 / hi, 1 / lo]`` rounded
+    outwards, or with the whole line where the divisor may vanish."""
+    straddles = b_lo <= 0 and b_hi >= 0
+    i_lo = -np.inf if straddles else next_below(_reciprocal(b_hi))
+    i_hi = np.inf if straddles else _up(_reciprocal(b_lo))
+    return interval_mul(a_lo, a_hi, i_lo, i_hi)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _square(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``intervals.square``: ``x * x``, from 0 where ``x`` straddles 0."""
+    s_lo, s_hi = interval_mul(lo, hi, lo, hi)
+    straddles = lo <= 0 and hi >= 0
+    return (0.0 if straddles else _max(s_lo, 0.0)), s_hi
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``intervals.sqrt``: the square root of the non-negative part; NaN above
+    where there is none."""
+    low = 0.0 if lo <= 0 else next_below(np.sqrt(_max(lo, 0.0)))
+    high = np.nan if hi < 0 else _up(np.sqrt(_max(hi, 0.0)))
+    return _max(low, 0.0), high
+
+
+@njit(cache=True, nogil=True)
+def _trig(a: float, b: float, sine: bool) -> tuple[float, float]:  # pragma: no cover
+    """``intervals.sin`` (or ``cos``) of ``[a, b]``: the steps of one element of
+    ``intervals._trig_bounds``."""
+    top = 0.5 * np.pi if sine else 0.0
+    bottom = -0.5 * np.pi if sine else np.pi
+    fa = np.sin(a) if sine else np.cos(a)
+    fb = np.sin(b) if sine else np.cos(b)
+    if fa != fa or fb != fb:
+        low = np.nan
+        high = np.nan
+    else:
+        low = min(fa, fb)
+        high = max(fa, fb)
+    wide = b - a >= _TWO_PI
+    if wide or _holds_angle(a, b, bottom):
+        low = -1.0
+    else:
+        low = _below(low, _LIB_REL, _LIB_TINY, False)
+    if wide or _holds_angle(a, b, top):
+        high = 1.0
+    else:
+        high = -_below(-high, _LIB_REL, _LIB_TINY, False)
+    out_lo = low if low != low else max(low, -1.0)
+    out_hi = high if high != high else min(high, 1.0)
+    return out_lo, out_hi
+
+
+@njit(cache=True, nogil=True)
+def _knee(
+    a_lo: float, a_hi: float, leg: Array
+) -> tuple[float, float, float, float, float, float, float, float]:  # pragma: no cover
+    """``RRLeg.knee_boxes`` of one angle enclosure: ``c = cos * a``, ``s = sin * a``,
+    then the elbow ``(c + base_x, s + base_y)``."""
+    a = leg[A]
+    c_lo, c_hi = _trig(a_lo, a_hi, False)
+    c_lo, c_hi = interval_mul(c_lo, c_hi, a, a)
+    s_lo, s_hi = _trig(a_lo, a_hi, True)
+    s_lo, s_hi = interval_mul(s_lo, s_hi, a, a)
+    x_lo, x_hi = interval_add(c_lo, c_hi, leg[BASE_X], leg[BASE_X])
+    y_lo, y_hi = interval_add(s_lo, s_hi, leg[BASE_Y], leg[BASE_Y])
+    return c_lo, c_hi, s_lo, s_hi, x_lo, x_hi, y_lo, y_hi
+
+
+@njit(cache=True, nogil=True)
+def knee_bounds(
+    a_lo: Array, a_hi: Array, leg: Array, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """``RRLeg.knee_boxes`` of the flat angle enclosures ``[a_lo, a_hi]`` into
+    ``out`` (4, n): ``cos * a``, ``sin * a``, and the elbow's x and y."""
+    for j in range(a_lo.size):
+        c_lo, c_hi, s_lo, s_hi, x_lo, x_hi, y_lo, y_hi = _knee(a_lo[j], a_hi[j], leg)
+        out_lo[0, j], out_hi[0, j] = c_lo, c_hi
+        out_lo[1, j], out_hi[1, j] = s_lo, s_hi
+        out_lo[2, j], out_hi[2, j] = x_lo, x_hi
+        out_lo[3, j], out_hi[3, j] = y_lo, y_hi
+
+
+@njit(cache=True, nogil=True)
+def _g(r_lo: float, r_hi: float, leg: Array) -> tuple[float, float]:  # pragma: no cover
+    """``branch_det``'s ``g(r) = r * 4 a^2 - (r + a^2 - b^2)^2``."""
+    p_lo, p_hi = interval_mul(r_lo, r_hi, leg[FOUR_A2], leg[FOUR_A2])
+    q_lo, q_hi = interval_add(r_lo, r_hi, leg[SHIFT_LO], leg[SHIFT_HI])
+    q_lo, q_hi = _square(q_lo, q_hi)
+    return interval_sub(p_lo, p_hi, q_lo, q_hi)
+
+
+@njit(cache=True, nogil=True)
+def _branch_det(
+    leg: Array,
+    side: float,
+    px_lo: float,
+    px_hi: float,
+    py_lo: float,
+    py_hi: float,
+    qx_lo: float,
+    qx_hi: float,
+    qy_lo: float,
+    qy_hi: float,
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``five_bar.branch_det`` of one box ``P`` and one enclosure ``Q`` of the other
+    elbow, ``side`` +1 on branch 0 and -1 on branch 1."""
+    x_lo, x_hi = interval_sub(px_lo, px_hi, leg[BASE_X], leg[BASE_X])
+    y_lo, y_hi = interval_sub(py_lo, py_hi, leg[BASE_Y], leg[BASE_Y])
+    sx_lo, sx_hi = _square(x_lo, x_hi)
+    sy_lo, sy_hi = _square(y_lo, y_hi)
+    rho_lo, rho_hi = interval_add(sx_lo, sx_hi, sy_lo, sy_hi)
+    # 1 - c = 0.5 - shift / (2 rho)
+    r2_lo, r2_hi = interval_mul(rho_lo, rho_hi, 2.0, 2.0)
+    t_lo, t_hi = _div(leg[SHIFT_LO], leg[SHIFT_HI], r2_lo, r2_hi)
+    omc_lo, omc_hi = interval_sub(0.5, 0.5, t_lo, t_hi)
+    # the range of g over rho: its ends, and its top where rho may reach a^2 + b^2
+    e1_lo, e1_hi = _g(rho_lo, rho_lo, leg)
+    e2_lo, e2_hi = _g(rho_hi, rho_hi, leg)
+    ends_lo, ends_hi = _min(e1_lo, e2_lo), _max(e1_hi, e2_hi)
+    top = leg[TOP]
+    _, top_hi = _g(top, top, leg)
+    inside = rho_lo <= top and rho_hi >= top
+    range_hi = _max(ends_hi, top_hi) if inside else ends_hi
+    k_lo, k_hi = _sqrt(ends_lo, range_hi)
+    k_lo, k_hi = _div(k_lo, k_hi, r2_lo, r2_hi)
+    # (Q - O) x (P - O) and (P - O) . (P - Q)
+    ox_lo, ox_hi = interval_sub(qx_lo, qx_hi, leg[BASE_X], leg[BASE_X])
+    oy_lo, oy_hi = interval_sub(qy_lo, qy_hi, leg[BASE_Y], leg[BASE_Y])
+    u_lo, u_hi = interval_mul(ox_lo, ox_hi, y_lo, y_hi)
+    v_lo, v_hi = interval_mul(oy_lo, oy_hi, x_lo, x_hi)
+    cross_lo, cross_hi = interval_sub(u_lo, u_hi, v_lo, v_hi)
+    wx_lo, wx_hi = interval_sub(px_lo, px_hi, qx_lo, qx_hi)
+    wy_lo, wy_hi = interval_sub(py_lo, py_hi, qy_lo, qy_hi)
+    u_lo, u_hi = interval_mul(x_lo, x_hi, wx_lo, wx_hi)
+    v_lo, v_hi = interval_mul(y_lo, y_hi, wy_lo, wy_hi)
+    dot_lo, dot_hi = interval_add(u_lo, u_hi, v_lo, v_hi)
+    # (1 - c) cross + (k dot) side
+    u_lo, u_hi = interval_mul(omc_lo, omc_hi, cross_lo, cross_hi)
+    v_lo, v_hi = interval_mul(k_lo, k_hi, dot_lo, dot_hi)
+    v_lo, v_hi = interval_mul(v_lo, v_hi, side, side)
+    return interval_add(u_lo, u_hi, v_lo, v_hi)
+
+
+@njit(cache=True, nogil=True)
+def det_a_bounds(
+    lo: Array,
+    hi: Array,
+    angles_lo: Array,
+    angles_hi: Array,
+    legs: Array,
+    branches: NDArray[np.int64],
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """``FiveBar.det_a_boxes`` of the (n, 2) boxes ``[lo, hi]`` with the legs'
+    angle enclosures ``angles`` (2, n) into ``out`` (n,), with ``legs`` (2,
+    N_CONSTANTS) and ``branches`` (2,) the posture's branch of each leg (-1:
+    no posture). The rows ``P - C``, ``P - D`` stacked, their determinant;
+    for a posture, intersected with each leg's :func:`_branch_det` form (times
+    +1 for the leg at A, -1 for the one at B), a NaN or empty meet leaving the
+    enclosure as it was."""
+    n = lo.shape[0]
+    for j in range(n):
+        px_lo, px_hi, py_lo, py_hi = lo[j, 0], hi[j, 0], lo[j, 1], hi[j, 1]
+        _, _, _, _, cx_lo, cx_hi, cy_lo, cy_hi = _knee(angles_lo[0, j], angles_hi[0, j], legs[0])
+        _, _, _, _, dx_lo, dx_hi, dy_lo, dy_hi = _knee(angles_lo[1, j], angles_hi[1, j], legs[1])
+        a_lo, a_hi = interval_sub(px_lo, px_hi, cx_lo, cx_hi)
+        b_lo, b_hi = interval_sub(py_lo, py_hi, cy_lo, cy_hi)
+        c_lo, c_hi = interval_sub(px_lo, px_hi, dx_lo, dx_hi)
+        d_lo, d_hi = interval_sub(py_lo, py_hi, dy_lo, dy_hi)
+        u_lo, u_hi = interval_mul(a_lo, a_hi, d_lo, d_hi)
+        v_lo, v_hi = interval_mul(b_lo, b_hi, c_lo, c_hi)
+        o_lo, o_hi = interval_sub(u_lo, u_hi, v_lo, v_hi)
+        if branches[0] >= 0:
+            for leg in range(2):
+                side = 1.0 if branches[leg] == 0 else -1.0
+                if leg == 0:
+                    f_lo, f_hi = _branch_det(
+                        legs[0], side, px_lo, px_hi, py_lo, py_hi, dx_lo, dx_hi, dy_lo, dy_hi
+                    )
+                    f_lo, f_hi = interval_mul(f_lo, f_hi, 1.0, 1.0)
+                else:
+                    f_lo, f_hi = _branch_det(
+                        legs[1], side, px_lo, px_hi, py_lo, py_hi, cx_lo, cx_hi, cy_lo, cy_hi
+                    )
+                    f_lo, f_hi = interval_mul(f_lo, f_hi, -1.0, -1.0)
+                m_lo, m_hi = _max(o_lo, f_lo), _min(o_hi, f_hi)
+                # a NaN bound leaves the other enclosure, and so does an empty meet
+                if not (m_lo != m_lo or m_hi != m_hi or m_lo > m_hi):
+                    o_lo, o_hi = m_lo, m_hi
+        out_lo[j], out_hi[j] = o_lo, o_hi
+
+
+# ------------------------------------------------------------------ reach
+@njit(cache=True, nogil=True, inline="always")
+def _near_far(
+    lo: float, hi: float, base: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """One axis of the box's point nearest the base (``np.clip``) and of its
+    corner farthest from it."""
+    near = _min(_max(base, lo), hi)
+    far = lo if abs(lo - base) > abs(hi - base) else hi
+    return near, far
+
+
+@njit(cache=True, nogil=True)
+def _distances(
+    lo: Array, hi: Array, j: int, leg: Array
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """The squared distances of box ``j``'s nearest point and farthest corner from
+    the base: ``square(near - base)`` summed over the axes, and so for ``far``."""
+    nx, fx = _near_far(lo[j, 0], hi[j, 0], leg[BASE_X])
+    ny, fy = _near_far(lo[j, 1], hi[j, 1], leg[BASE_Y])
+    a_lo, a_hi = interval_sub(nx, nx, leg[BASE_X], leg[BASE_X])
+    b_lo, b_hi = interval_sub(ny, ny, leg[BASE_Y], leg[BASE_Y])
+    a_lo, a_hi = _square(a_lo, a_hi)
+    b_lo, b_hi = _square(b_lo, b_hi)
+    n_lo, n_hi = interval_add(a_lo, a_hi, b_lo, b_hi)
+    a_lo, a_hi = interval_sub(fx, fx, leg[BASE_X], leg[BASE_X])
+    b_lo, b_hi = interval_sub(fy, fy, leg[BASE_Y], leg[BASE_Y])
+    a_lo, a_hi = _square(a_lo, a_hi)
+    b_lo, b_hi = _square(b_lo, b_hi)
+    f_lo, f_hi = interval_add(a_lo, a_hi, b_lo, b_hi)
+    return n_lo, n_hi, f_lo, f_hi
+
+
+@njit(cache=True, nogil=True)
+def _g_alpha(rho2_lo: float, rho2_hi: float, leg: Array) -> tuple[float, float]:  # pragma: no cover
+    """``RRLeg._alpha``'s ``g(rho2) = rho / 2a + k / rho``, ``rho = sqrt(rho2)``."""
+    r_lo, r_hi = _sqrt(rho2_lo, rho2_hi)
+    p_lo, p_hi = _div(r_lo, r_hi, leg[TWO_A], leg[TWO_A])
+    q_lo, q_hi = _div(leg[K_LO], leg[K_HI], r_lo, r_hi)
+    return interval_add(p_lo, p_hi, q_lo, q_hi)
+
+
+@njit(cache=True, nogil=True)
+def _arccos_args(
+    n_lo: float, n_hi: float, f_lo: float, f_hi: float, leg: Array
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``RRLeg._alpha`` up to its arccos: the clipped arguments whose arccos are the
+    lower and upper bounds of alpha (of the upper and lower bounds of g)."""
+    gn_lo, gn_hi = _g_alpha(n_lo, n_hi, leg)
+    gf_lo, gf_hi = _g_alpha(f_lo, f_hi, leg)
+    g_lo = _min(gn_lo, gf_lo)
+    g_hi = _max(gn_hi, gf_hi)
+    if leg[K_POSITIVE] > 0:
+        inside = n_lo <= leg[STAR_HI] and f_hi >= leg[STAR_LO]
+        if inside:
+            g_lo = _min(g_lo, leg[G_MIN])
+    g_lo = -np.inf if g_lo != g_lo else g_lo
+    g_hi = np.inf if g_hi != g_hi else g_hi
+    # intervals.arccos: np.clip of each bound to [-1, 1]
+    return _min(_max(g_hi, -1.0), 1.0), _min(_max(g_lo, -1.0), 1.0)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _alpha(acos_lo: float, acos_hi: float) -> tuple[float, float]:  # pragma: no cover
+    """``intervals.arccos`` from the arccos of its two arguments."""
+    return _max(_lib_down(acos_lo), 0.0), _min(_lib_up(acos_hi), _PI_UP)
+
+
+@njit(cache=True, nogil=True)
+def reach_prepare(
+    lo: Array,
+    hi: Array,
+    cs: Array,
+    sn: Array,
+    leg: Array,
+    codes: NDArray[np.uint8],
+    out: Array,
+    status: NDArray[np.uint8],
+) -> None:  # pragma: no cover - compiled
+    """``RRLeg.reach`` up to its library functions, over the (n, 2) boxes: into
+    ``status`` (n,) the reach codes (``codes``: REGULAR, FOLD_OUTER, FOLD_INNER,
+    REACH_OUT, REACH_UNKNOWN); into ``out`` (6, n) the arguments of alpha's
+    arccos (:func:`_arccos_args`) and the bounds of ``ux``, ``uy``, the box
+    about the base rotated by the direction ``(cs, sn)`` of its centre (whose
+    corners' arctan2 give the direction's enclosure)."""
+    for j in range(lo.shape[0]):
+        n_lo, n_hi, f_lo, f_hi = _distances(lo, hi, j, leg)
+        out_lo, out_hi = leg[OUT_LO], leg[OUT_HI]
+        in_lo, in_hi = leg[IN_LO], leg[IN_HI]
+        away = (n_lo > out_hi) or (f_hi < in_lo)
+        regular = (n_lo > in_hi) and (f_hi < out_lo) and (n_lo > 0)
+        straddle_out = (n_hi < out_lo) and (f_lo > out_hi)
+        straddle_in = (n_hi < in_lo) and (f_lo > in_hi)
+        fold_outer = straddle_out and (n_lo > in_hi) and not away
+        fold_inner = straddle_in and (f_hi < out_lo) and not away and (in_lo > 0)
+        code = codes[4]
+        if fold_inner:
+            code = codes[2]
+        if fold_outer:
+            code = codes[1]
+        if regular:
+            code = codes[0]
+        if away:
+            code = codes[3]
+        status[j] = code
+        out[0, j], out[1, j] = _arccos_args(n_lo, n_hi, f_lo, f_hi, leg)
+        # the box about the base, turned by the direction of its centre
+        x_lo, x_hi = interval_sub(lo[j, 0], hi[j, 0], leg[BASE_X], leg[BASE_X])
+        y_lo, y_hi = interval_sub(lo[j, 1], hi[j, 1], leg[BASE_Y], leg[BASE_Y])
+        c, s = cs[j], sn[j]
+        p_lo, p_hi = interval_mul(x_lo, x_hi, c, c)
+        q_lo, q_hi = interval_mul(y_lo, y_hi, s, s)
+        out[2, j], out[3, j] = interval_add(p_lo, p_hi, q_lo, q_hi)
+        p_lo, p_hi = interval_mul(y_lo, y_hi, c, c)
+        q_lo, q_hi = interval_mul(x_lo, x_hi, s, s)
+        out[4, j], out[5, j] = interval_sub(p_lo, p_hi, q_lo, q_hi)
+
+
+#: ``reach``'s enclosure of 2 pi
+_TWO_PI_LO = float(np.nextafter(2 * np.pi, 0.0))
+_TWO_PI_HI = float(np.nextafter(2 * np.pi, np.inf))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _atan_bounds(
+    lo: float, hi: float, cut: bool
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``intervals.arctan2`` from the least and greatest arctan2 of the corners:
+    widened, the whole ``[-pi, pi]`` where the box meets the cut."""
+    low = -_PI_UP if cut else _lib_down(lo)
+    high = _PI_UP if cut else _lib_up(hi)
+    return _max(low, -_PI_UP), _min(high, _PI_UP)
+
+
+@njit(cache=True, nogil=True)
+def reach_finish(
+    lo: Array,
+    hi: Array,
+    status: NDArray[np.uint8],
+    codes: NDArray[np.uint8],
+    cs: Array,
+    sn: Array,
+    ref: Array,
+    corners: Array,
+    prep: Array,
+    acos: Array,
+    leg: Array,
+    out_lo: Array,
+    out_hi: Array,
+    fold_connected: NDArray[np.bool_],
+) -> None:  # pragma: no cover - compiled
+    """``RRLeg.reach`` after its library functions: with ``ref`` the arctan2 of
+    ``(sn, cs)``, ``corners`` (4, n) the arctan2 of the corners of ``(uy, ux)``
+    (lo lo, lo hi, hi lo, hi hi; ``prep`` from :func:`reach_prepare`) and
+    ``acos`` (2, n) the arccos of alpha's arguments, the branches ``theta +
+    alpha``, ``theta - alpha`` and the hull of both into ``out`` (3, n), and
+    where the leg's configurations join through its fold into
+    ``fold_connected``."""
+    unknown, outer, inner = codes[4], codes[1], codes[2]
+    for j in range(lo.shape[0]):
+        a_lo, a_hi = _alpha(acos[0, j], acos[1, j])
+        # the direction: the centre's, plus that of the box turned back by it
+        v = ref[j]
+        r_lo, r_hi = _atan_bounds(v, v, cs[j] <= 0 and sn[j] <= 0 and sn[j] >= 0)
+        c0, c1, c2, c3 = corners[0, j], corners[1, j], corners[2, j], corners[3, j]
+        m_lo = _min(_min(_min(c0, c1), c2), c3)
+        m_hi = _max(_max(_max(c0, c1), c2), c3)
+        cut = prep[2, j] <= 0 and prep[4, j] <= 0 and prep[5, j] >= 0
+        t_lo, t_hi = _atan_bounds(m_lo, m_hi, cut)
+        th_lo, th_hi = interval_add(r_lo, r_hi, t_lo, t_hi)
+        out_lo[0, j], out_hi[0, j] = interval_add(th_lo, th_hi, a_lo, a_hi)
+        out_lo[1, j], out_hi[1, j] = interval_sub(th_lo, th_hi, a_lo, a_hi)
+        # the hull: theta + [-alpha, alpha] or theta + [alpha, 2 pi - alpha]
+        z_lo, z_hi = interval_add(th_lo, th_hi, -a_hi, a_hi)
+        q_lo, q_hi = interval_sub(_TWO_PI_LO, _TWO_PI_HI, a_lo, a_lo)
+        p_lo, p_hi = interval_add(th_lo, th_hi, _min(a_lo, q_lo), _max(a_lo, q_hi))
+        if z_hi - z_lo <= p_hi - p_lo:
+            h_lo, h_hi = z_lo, z_hi
+        else:
+            h_lo, h_hi = p_lo, p_hi
+        code = status[j]
+        if code == unknown:
+            h_lo, h_hi = -np.inf, np.inf
+        out_lo[2, j], out_hi[2, j] = h_lo, h_hi
+        bx, by = leg[BASE_X], leg[BASE_Y]
+        beyond = (bx < lo[j, 0] or bx > hi[j, 0]) and (by < lo[j, 1] or by > hi[j, 1])
+        fold_connected[j] = code == outer or (code == inner and beyond)
+
+
+# ------------------------------------------------------------------ fold flows
+#: the rows of the fold terms (fold_terms_prepare): the box about the base, its
+#: distance and squared distance, then g' (the slope), replaced by alpha's scale
+DX, DY, RHO, RHO2, SCALE = range(5)
+
+
+@njit(cache=True, nogil=True)
+def fold_terms_prepare(
+    lo: Array, hi: Array, leg: Array, terms_lo: Array, terms_hi: Array, args: Array
+) -> None:  # pragma: no cover - compiled
+    """``RRLeg._fold_terms`` up to its arccos: ``dx``, ``dy``, ``rho``, ``rho2`` and
+    the slope ``g'(rho)`` over the (n, 2) boxes into ``terms`` (5, n), the
+    arguments of alpha's arccos into ``args`` (2, n)."""
+    for j in range(lo.shape[0]):
+        x_lo, x_hi = interval_sub(lo[j, 0], hi[j, 0], leg[BASE_X], leg[BASE_X])
+        y_lo, y_hi = interval_sub(lo[j, 1], hi[j, 1], leg[BASE_Y], leg[BASE_Y])
+        a_lo, a_hi = _square(x_lo, x_hi)
+        b_lo, b_hi = _square(y_lo, y_hi)
+        r2_lo, r2_hi = interval_add(a_lo, a_hi, b_lo, b_hi)
+        r_lo, r_hi = _sqrt(r2_lo, r2_hi)
+        q_lo, q_hi = _div(leg[K_LO], leg[K_HI], r2_lo, r2_hi)
+        s_lo, s_hi = interval_sub(leg[SLOPE_LO], leg[SLOPE_HI], q_lo, q_hi)
+        terms_lo[DX, j], terms_hi[DX, j] = x_lo, x_hi
+        terms_lo[DY, j], terms_hi[DY, j] = y_lo, y_hi
+        terms_lo[RHO, j], terms_hi[RHO, j] = r_lo, r_hi
+        terms_lo[RHO2, j], terms_hi[RHO2, j] = r2_lo, r2_hi
+        terms_lo[SCALE, j], terms_hi[SCALE, j] = s_lo, s_hi
+        n_lo, n_hi, f_lo, f_hi = _distances(lo, hi, j, leg)
+        args[0, j], args[1, j] = _arccos_args(n_lo, n_hi, f_lo, f_hi, leg)
+
+
+@njit(cache=True, nogil=True)
+def fold_terms_finish(
+    acos: Array, terms_lo: Array, terms_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """``RRLeg._fold_terms`` after its arccos (``acos`` (2, n)): the slope in
+    ``terms`` times ``[1 / max sin alpha, inf]``, alpha's scale."""
+    for j in range(acos.shape[1]):
+        a_lo, a_hi = _alpha(acos[0, j], acos[1, j])
+        sin_max = _trig(a_lo, a_hi, True)[1]
+        inverse = 0.0
+        if sin_max > 0:
+            inverse = np.nextafter(1.0 / _max(sin_max, 1e-300), 0.0)
+        terms_lo[SCALE, j], terms_hi[SCALE, j] = interval_mul(
+            terms_lo[SCALE, j], terms_hi[SCALE, j], inverse, np.inf
+        )
+
+
+@njit(cache=True, nogil=True)
+def fold_rate_bounds(
+    terms_lo: Array,
+    terms_hi: Array,
+    velocity_lo: Array,
+    velocity_hi: Array,
+    status: NDArray[np.uint8],
+    codes: NDArray[np.uint8],
+    sign: float,
+    keeps: NDArray[np.bool_],
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """``RRLeg.fold_flow`` from the fold terms (``terms`` (5, n)) and the velocity
+    (2, n): whether the motion keeps the pose reachable (``keeps``), and the
+    joint's rate ``turning / rho2 + (-scale (radial / rho)) sign`` into ``out``."""
+    outer, inner = codes[1], codes[2]
+    for j in range(terms_lo.shape[1]):
+        x_lo, x_hi = terms_lo[DX, j], terms_hi[DX, j]
+        y_lo, y_hi = terms_lo[DY, j], terms_hi[DY, j]
+        u_lo, u_hi = velocity_lo[0, j], velocity_hi[0, j]
+        v_lo, v_hi = velocity_lo[1, j], velocity_hi[1, j]
+        p_lo, p_hi = interval_mul(x_lo, x_hi, u_lo, u_hi)
+        q_lo, q_hi = interval_mul(y_lo, y_hi, v_lo, v_hi)
+        radial_lo, radial_hi = interval_add(p_lo, p_hi, q_lo, q_hi)
+        p_lo, p_hi = interval_mul(x_lo, x_hi, v_lo, v_hi)
+        q_lo, q_hi = interval_mul(y_lo, y_hi, u_lo, u_hi)
+        turn_lo, turn_hi = interval_sub(p_lo, p_hi, q_lo, q_hi)
+        code = status[j]
+        keeps[j] = (code == outer and radial_hi <= 0) or (code == inner and radial_lo >= 0)
+        p_lo, p_hi = _div(radial_lo, radial_hi, terms_lo[RHO, j], terms_hi[RHO, j])
+        p_lo, p_hi = interval_mul(-terms_hi[SCALE, j], -terms_lo[SCALE, j], p_lo, p_hi)
+        q_lo, q_hi = _div(turn_lo, turn_hi, terms_lo[RHO2, j], terms_hi[RHO2, j])
+        p_lo, p_hi = interval_mul(p_lo, p_hi, sign, sign)
+        out_lo[j], out_hi[j] = interval_add(q_lo, q_hi, p_lo, p_hi)
