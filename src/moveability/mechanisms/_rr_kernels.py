@@ -38,11 +38,14 @@ from ..intervals import (
     _PI_UP,
     _TWO_PI,
     _below,
+    _down,
     _holds_angle,
+    add_into,
     interval_add,
     interval_mul,
     interval_sub,
-    next_below,
+    mul_into,
+    sub_into,
 )
 from ..types import Array
 
@@ -70,10 +73,18 @@ _CODES = 5
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _next_below(x: float) -> float:  # pragma: no cover - compiled
+    """:func:`~moveability.intervals.next_below` (``_below`` by one ulp), as its
+    inlined form ``intervals._down`` computes it: without jumps on the data, so
+    that the loops around it vectorise."""
+    return _down(x, False)
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _up(x: float) -> float:  # pragma: no cover - compiled
-    """An upper bound moved up as :func:`~moveability.intervals.next_below` moves a
-    lower bound down (``intervals._above`` by one ulp: ``-_below(-x)``)."""
-    return -next_below(-x)
+    """An upper bound moved up as :func:`_next_below` moves a lower bound down
+    (``intervals._above`` by one ulp: ``-_below(-x)``)."""
+    return -_down(-x, False)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -118,7 +129,7 @@ def _div(
     """``Interval.__truediv__``: the product with ``[1 / hi, 1 / lo]`` rounded
     outwards, or with the whole line where the divisor may vanish."""
     straddles = b_lo <= 0 and b_hi >= 0
-    i_lo = -np.inf if straddles else next_below(_reciprocal(b_hi))
+    i_lo = -np.inf if straddles else _next_below(_reciprocal(b_hi))
     i_hi = np.inf if straddles else _up(_reciprocal(b_lo))
     return interval_mul(a_lo, a_hi, i_lo, i_hi)
 
@@ -135,7 +146,7 @@ def _square(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - 
 def _sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
     """``intervals.sqrt``: the square root of the non-negative part; NaN above
     where there is none."""
-    low = 0.0 if lo <= 0 else next_below(np.sqrt(_max(lo, 0.0)))
+    low = 0.0 if lo <= 0 else _next_below(np.sqrt(_max(lo, 0.0)))
     high = np.nan if hi < 0 else _up(np.sqrt(_max(hi, 0.0)))
     return _max(low, 0.0), high
 
@@ -170,17 +181,17 @@ def _trig(a: float, b: float, sine: bool) -> tuple[float, float]:  # pragma: no 
 
 @njit(cache=True, nogil=True)
 def _knee(
-    a_lo: float, a_hi: float, leg: Array
+    a_lo: float, a_hi: float, a: float, bx: float, by: float
 ) -> tuple[float, float, float, float, float, float, float, float]:  # pragma: no cover
-    """``RRLeg.knee_boxes`` of one angle enclosure: ``c = cos * a``, ``s = sin * a``,
-    then the elbow ``(c + base_x, s + base_y)``."""
-    a = leg[A]
+    """``RRLeg.knee_boxes`` of one angle enclosure, for a leg of proximal length
+    ``a`` and base ``(bx, by)``: ``c = cos * a``, ``s = sin * a``, then the elbow
+    ``(c + bx, s + by)``."""
     c_lo, c_hi = _trig(a_lo, a_hi, False)
     c_lo, c_hi = interval_mul(c_lo, c_hi, a, a)
     s_lo, s_hi = _trig(a_lo, a_hi, True)
     s_lo, s_hi = interval_mul(s_lo, s_hi, a, a)
-    x_lo, x_hi = interval_add(c_lo, c_hi, leg[BASE_X], leg[BASE_X])
-    y_lo, y_hi = interval_add(s_lo, s_hi, leg[BASE_Y], leg[BASE_Y])
+    x_lo, x_hi = interval_add(c_lo, c_hi, bx, bx)
+    y_lo, y_hi = interval_add(s_lo, s_hi, by, by)
     return c_lo, c_hi, s_lo, s_hi, x_lo, x_hi, y_lo, y_hi
 
 
@@ -190,73 +201,172 @@ def knee_bounds(
 ) -> None:  # pragma: no cover - compiled
     """``RRLeg.knee_boxes`` of the flat angle enclosures ``[a_lo, a_hi]`` into
     ``out`` (4, n): ``cos * a``, ``sin * a``, and the elbow's x and y."""
+    a, bx, by = leg[A], leg[BASE_X], leg[BASE_Y]
     for j in range(a_lo.size):
-        c_lo, c_hi, s_lo, s_hi, x_lo, x_hi, y_lo, y_hi = _knee(a_lo[j], a_hi[j], leg)
+        c_lo, c_hi, s_lo, s_hi, x_lo, x_hi, y_lo, y_hi = _knee(a_lo[j], a_hi[j], a, bx, by)
         out_lo[0, j], out_hi[0, j] = c_lo, c_hi
         out_lo[1, j], out_hi[1, j] = s_lo, s_hi
         out_lo[2, j], out_hi[2, j] = x_lo, x_hi
         out_lo[3, j], out_hi[3, j] = y_lo, y_hi
 
 
-@njit(cache=True, nogil=True)
-def _g(r_lo: float, r_hi: float, leg: Array) -> tuple[float, float]:  # pragma: no cover
-    """``branch_det``'s ``g(r) = r * 4 a^2 - (r + a^2 - b^2)^2``."""
-    p_lo, p_hi = interval_mul(r_lo, r_hi, leg[FOUR_A2], leg[FOUR_A2])
-    q_lo, q_hi = interval_add(r_lo, r_hi, leg[SHIFT_LO], leg[SHIFT_HI])
+@njit(cache=True, nogil=True, inline="always")
+def _g(
+    r_lo: float, r_hi: float, four_a2: float, shift_lo: float, shift_hi: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``branch_det``'s ``g(r) = r * 4 a^2 - (r + a^2 - b^2)^2`` (``four_a2`` the
+    number ``4 a^2``, ``shift`` the enclosure of ``a^2 - b^2``)."""
+    p_lo, p_hi = interval_mul(r_lo, r_hi, four_a2, four_a2)
+    q_lo, q_hi = interval_add(r_lo, r_hi, shift_lo, shift_hi)
     q_lo, q_hi = _square(q_lo, q_hi)
     return interval_sub(p_lo, p_hi, q_lo, q_hi)
 
 
+# ------------------------------------------------------------------ passes
+# det A works chunk by chunk (as mechanisms/_rpr_kernels.py does): each quantity
+# of a chunk's boxes is a row (a "slot") of two scratch arrays ``lo``, ``hi``
+# (slots x _CHUNK), and each interval operation one compiled loop over the
+# chunk's boxes, which the compiler vectorises (the primitives are free of jumps
+# on the data): several times faster than one box at a time. Slots are passed as
+# np.int64 (a constant would have numba compile each pass once per slot number).
+
+#: a slot (a row of the scratch)
+Slot = int | np.int64
+
+#: boxes per chunk: the scratch (about 40 slots, 2 x 8 bytes a box each) stays in cache
+_CHUNK = 256
+
+
 @njit(cache=True, nogil=True)
-def _branch_det(
+def _mul(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` * slot ``b`` (the first ``w`` boxes)."""
+    mul_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
+
+
+@njit(cache=True, nogil=True)
+def _add(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` + slot ``b``."""
+    add_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
+
+
+@njit(cache=True, nogil=True)
+def _sub(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` - slot ``b``."""
+    sub_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
+
+
+@njit(cache=True, nogil=True)
+def _mul_c(
+    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = slot ``a`` * the interval ``[c_lo, c_hi]`` (``Interval * c``)."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_mul(a_lo[j], a_hi[j], c_lo, c_hi)
+
+
+@njit(cache=True, nogil=True)
+def _sub_c(
+    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = slot ``a`` - the interval ``[c_lo, c_hi]``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_sub(a_lo[j], a_hi[j], c_lo, c_hi)
+
+
+@njit(cache=True, nogil=True)
+def _c_sub(
+    lo: Array, hi: Array, c_lo: float, c_hi: float, a: Slot, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = the interval ``[c_lo, c_hi]`` - slot ``a``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_sub(c_lo, c_hi, a_lo[j], a_hi[j])
+
+
+@njit(cache=True, nogil=True)
+def _square_into(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = ``intervals.square`` of slot ``a``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = _square(a_lo[j], a_hi[j])
+
+
+@njit(cache=True, nogil=True)
+def _div_into(
+    lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = slot ``a`` / slot ``b`` (``Interval.__truediv__``)."""
+    for j in range(w):
+        o_lo_j, o_hi_j = _div(lo[a, j], hi[a, j], lo[b, j], hi[b, j])
+        lo[o, j], hi[o, j] = o_lo_j, o_hi_j
+
+
+@njit(cache=True, nogil=True)
+def _branch_form(
+    lo: Array,
+    hi: Array,
     leg: Array,
     side: float,
-    px_lo: float,
-    px_hi: float,
-    py_lo: float,
-    py_hi: float,
-    qx_lo: float,
-    qx_hi: float,
-    qy_lo: float,
-    qy_hi: float,
-) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``five_bar.branch_det`` of one box ``P`` and one enclosure ``Q`` of the other
-    elbow, ``side`` +1 on branch 0 and -1 on branch 1."""
-    x_lo, x_hi = interval_sub(px_lo, px_hi, leg[BASE_X], leg[BASE_X])
-    y_lo, y_hi = interval_sub(py_lo, py_hi, leg[BASE_Y], leg[BASE_Y])
-    sx_lo, sx_hi = _square(x_lo, x_hi)
-    sy_lo, sy_hi = _square(y_lo, y_hi)
-    rho_lo, rho_hi = interval_add(sx_lo, sx_hi, sy_lo, sy_hi)
+    g_top: float,
+    px: Slot,
+    q: Slot,
+    o: Slot,
+    t: Slot,
+    w: int,
+) -> None:  # pragma: no cover - compiled
+    """``five_bar.branch_det`` over the chunk into slot ``o``: the pose in slots
+    ``px``, ``px + 1``, the other elbow in ``q``, ``q + 1``, ``side`` +1 on branch
+    0 and -1 on branch 1, ``g_top`` the upper bound of ``g(a^2 + b^2)``; slots
+    ``t .. t + 16`` are scratch."""
+    x, y, sx, sy, rho, r2, omc, k = t, t + 1, t + 2, t + 3, t + 4, t + 5, t + 6, t + 7
+    ox, oy, u, v, cross, wx, wy, dot, shift = (
+        t + 8, t + 9, t + 10, t + 11, t + 12, t + 13, t + 14, t + 15, t + 16,
+    )  # fmt: skip
+    _sub_c(lo, hi, px, leg[BASE_X], leg[BASE_X], x, w)
+    _sub_c(lo, hi, px + 1, leg[BASE_Y], leg[BASE_Y], y, w)
+    _square_into(lo, hi, x, sx, w)
+    _square_into(lo, hi, y, sy, w)
+    _add(lo, hi, sx, sy, rho, w)
     # 1 - c = 0.5 - shift / (2 rho)
-    r2_lo, r2_hi = interval_mul(rho_lo, rho_hi, 2.0, 2.0)
-    t_lo, t_hi = _div(leg[SHIFT_LO], leg[SHIFT_HI], r2_lo, r2_hi)
-    omc_lo, omc_hi = interval_sub(0.5, 0.5, t_lo, t_hi)
-    # the range of g over rho: its ends, and its top where rho may reach a^2 + b^2
-    e1_lo, e1_hi = _g(rho_lo, rho_lo, leg)
-    e2_lo, e2_hi = _g(rho_hi, rho_hi, leg)
-    ends_lo, ends_hi = _min(e1_lo, e2_lo), _max(e1_hi, e2_hi)
-    top = leg[TOP]
-    _, top_hi = _g(top, top, leg)
-    inside = rho_lo <= top and rho_hi >= top
-    range_hi = _max(ends_hi, top_hi) if inside else ends_hi
-    k_lo, k_hi = _sqrt(ends_lo, range_hi)
-    k_lo, k_hi = _div(k_lo, k_hi, r2_lo, r2_hi)
+    _mul_c(lo, hi, rho, 2.0, 2.0, r2, w)
+    lo[shift, :w] = leg[SHIFT_LO]
+    hi[shift, :w] = leg[SHIFT_HI]
+    _div_into(lo, hi, shift, r2, omc, w)
+    _c_sub(lo, hi, 0.5, 0.5, omc, omc, w)
+    # k: the square root of the range of g over rho (its ends, and its top where
+    # rho may reach a^2 + b^2), over 2 rho
+    top, four_a2, shift_lo, shift_hi = leg[TOP], leg[FOUR_A2], leg[SHIFT_LO], leg[SHIFT_HI]
+    for j in range(w):
+        r_lo, r_hi = lo[rho, j], hi[rho, j]
+        e1_lo, e1_hi = _g(r_lo, r_lo, four_a2, shift_lo, shift_hi)
+        e2_lo, e2_hi = _g(r_hi, r_hi, four_a2, shift_lo, shift_hi)
+        ends_lo, ends_hi = _min(e1_lo, e2_lo), _max(e1_hi, e2_hi)
+        inside = r_lo <= top and r_hi >= top
+        lo[k, j], hi[k, j] = _sqrt(ends_lo, _max(ends_hi, g_top) if inside else ends_hi)
+    _div_into(lo, hi, k, r2, k, w)
     # (Q - O) x (P - O) and (P - O) . (P - Q)
-    ox_lo, ox_hi = interval_sub(qx_lo, qx_hi, leg[BASE_X], leg[BASE_X])
-    oy_lo, oy_hi = interval_sub(qy_lo, qy_hi, leg[BASE_Y], leg[BASE_Y])
-    u_lo, u_hi = interval_mul(ox_lo, ox_hi, y_lo, y_hi)
-    v_lo, v_hi = interval_mul(oy_lo, oy_hi, x_lo, x_hi)
-    cross_lo, cross_hi = interval_sub(u_lo, u_hi, v_lo, v_hi)
-    wx_lo, wx_hi = interval_sub(px_lo, px_hi, qx_lo, qx_hi)
-    wy_lo, wy_hi = interval_sub(py_lo, py_hi, qy_lo, qy_hi)
-    u_lo, u_hi = interval_mul(x_lo, x_hi, wx_lo, wx_hi)
-    v_lo, v_hi = interval_mul(y_lo, y_hi, wy_lo, wy_hi)
-    dot_lo, dot_hi = interval_add(u_lo, u_hi, v_lo, v_hi)
+    _sub_c(lo, hi, q, leg[BASE_X], leg[BASE_X], ox, w)
+    _sub_c(lo, hi, q + 1, leg[BASE_Y], leg[BASE_Y], oy, w)
+    _mul(lo, hi, ox, y, u, w)
+    _mul(lo, hi, oy, x, v, w)
+    _sub(lo, hi, u, v, cross, w)
+    _sub(lo, hi, px, q, wx, w)
+    _sub(lo, hi, px + 1, q + 1, wy, w)
+    _mul(lo, hi, x, wx, u, w)
+    _mul(lo, hi, y, wy, v, w)
+    _add(lo, hi, u, v, dot, w)
     # (1 - c) cross + (k dot) side
-    u_lo, u_hi = interval_mul(omc_lo, omc_hi, cross_lo, cross_hi)
-    v_lo, v_hi = interval_mul(k_lo, k_hi, dot_lo, dot_hi)
-    v_lo, v_hi = interval_mul(v_lo, v_hi, side, side)
-    return interval_add(u_lo, u_hi, v_lo, v_hi)
+    _mul(lo, hi, omc, cross, u, w)
+    _mul(lo, hi, k, dot, v, w)
+    _mul_c(lo, hi, v, side, side, v, w)
+    _add(lo, hi, u, v, o, w)
+
+
+# the slots of det_a_bounds
+_P, _ANG, _KNEE, _ROWS, _NAT, _FORM, _TEMP = 0, 2, 4, 8, 14, 15, 16
+_SLOTS = _TEMP + 17
 
 
 @njit(cache=True, nogil=True)
@@ -274,39 +384,65 @@ def det_a_bounds(
     angle enclosures ``angles`` (2, n) into ``out`` (n,), with ``legs`` (2,
     N_CONSTANTS) and ``branches`` (2,) the posture's branch of each leg (-1:
     no posture). The rows ``P - C``, ``P - D`` stacked, their determinant;
-    for a posture, intersected with each leg's :func:`_branch_det` form (times
-    +1 for the leg at A, -1 for the one at B), a NaN or empty meet leaving the
-    enclosure as it was."""
+    for a posture, intersected with each leg's branch form (times +1 for the
+    leg at A, -1 for the one at B), a NaN or empty meet leaving the enclosure
+    as it was."""
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_SLOTS, w)), np.empty((_SLOTS, w))
+    # the slots as run-time integers
+    p, knee, rows = np.int64(_P), np.int64(_KNEE), np.int64(_ROWS)
+    nat, form, temp = np.int64(_NAT), np.int64(_FORM), np.int64(_TEMP)
+    g_top = np.empty(2)
+    for leg in range(2):
+        top = legs[leg, TOP]
+        g_top[leg] = _g(top, top, legs[leg, FOUR_A2], legs[leg, SHIFT_LO], legs[leg, SHIFT_HI])[1]
+    a0, bx0, by0 = legs[0, A], legs[0, BASE_X], legs[0, BASE_Y]
+    a1, bx1, by1 = legs[1, A], legs[1, BASE_X], legs[1, BASE_Y]
+    leg0, leg1 = legs[0], legs[1]
     n = lo.shape[0]
-    for j in range(n):
-        px_lo, px_hi, py_lo, py_hi = lo[j, 0], hi[j, 0], lo[j, 1], hi[j, 1]
-        _, _, _, _, cx_lo, cx_hi, cy_lo, cy_hi = _knee(angles_lo[0, j], angles_hi[0, j], legs[0])
-        _, _, _, _, dx_lo, dx_hi, dy_lo, dy_hi = _knee(angles_lo[1, j], angles_hi[1, j], legs[1])
-        a_lo, a_hi = interval_sub(px_lo, px_hi, cx_lo, cx_hi)
-        b_lo, b_hi = interval_sub(py_lo, py_hi, cy_lo, cy_hi)
-        c_lo, c_hi = interval_sub(px_lo, px_hi, dx_lo, dx_hi)
-        d_lo, d_hi = interval_sub(py_lo, py_hi, dy_lo, dy_hi)
-        u_lo, u_hi = interval_mul(a_lo, a_hi, d_lo, d_hi)
-        v_lo, v_hi = interval_mul(b_lo, b_hi, c_lo, c_hi)
-        o_lo, o_hi = interval_sub(u_lo, u_hi, v_lo, v_hi)
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        for j in range(size):
+            s_lo[p, j], s_hi[p, j] = lo[s + j, 0], hi[s + j, 0]
+            s_lo[p + 1, j], s_hi[p + 1, j] = lo[s + j, 1], hi[s + j, 1]
+        for j in range(size):
+            _, _, _, _, x_lo, x_hi, y_lo, y_hi = _knee(
+                angles_lo[0, s + j], angles_hi[0, s + j], a0, bx0, by0
+            )
+            s_lo[knee, j], s_hi[knee, j] = x_lo, x_hi
+            s_lo[knee + 1, j], s_hi[knee + 1, j] = y_lo, y_hi
+        for j in range(size):
+            _, _, _, _, x_lo, x_hi, y_lo, y_hi = _knee(
+                angles_lo[1, s + j], angles_hi[1, s + j], a1, bx1, by1
+            )
+            s_lo[knee + 2, j], s_hi[knee + 2, j] = x_lo, x_hi
+            s_lo[knee + 3, j], s_hi[knee + 3, j] = y_lo, y_hi
+        # the rows P - C, P - D and their determinant
+        _sub(s_lo, s_hi, p, knee, rows, size)
+        _sub(s_lo, s_hi, p + 1, knee + 1, rows + 1, size)
+        _sub(s_lo, s_hi, p, knee + 2, rows + 2, size)
+        _sub(s_lo, s_hi, p + 1, knee + 3, rows + 3, size)
+        _mul(s_lo, s_hi, rows, rows + 3, rows + 4, size)
+        _mul(s_lo, s_hi, rows + 1, rows + 2, rows + 5, size)
+        _sub(s_lo, s_hi, rows + 4, rows + 5, nat, size)
         if branches[0] >= 0:
             for leg in range(2):
                 side = 1.0 if branches[leg] == 0 else -1.0
-                if leg == 0:
-                    f_lo, f_hi = _branch_det(
-                        legs[0], side, px_lo, px_hi, py_lo, py_hi, dx_lo, dx_hi, dy_lo, dy_hi
-                    )
-                    f_lo, f_hi = interval_mul(f_lo, f_hi, 1.0, 1.0)
-                else:
-                    f_lo, f_hi = _branch_det(
-                        legs[1], side, px_lo, px_hi, py_lo, py_hi, cx_lo, cx_hi, cy_lo, cy_hi
-                    )
-                    f_lo, f_hi = interval_mul(f_lo, f_hi, -1.0, -1.0)
-                m_lo, m_hi = _max(o_lo, f_lo), _min(o_hi, f_hi)
-                # a NaN bound leaves the other enclosure, and so does an empty meet
-                if not (m_lo != m_lo or m_hi != m_hi or m_lo > m_hi):
-                    o_lo, o_hi = m_lo, m_hi
-        out_lo[j], out_hi[j] = o_lo, o_hi
+                sign = 1.0 if leg == 0 else -1.0
+                other = knee + 2 * (1 - leg)
+                _branch_form(
+                    s_lo, s_hi, leg0 if leg == 0 else leg1, side, g_top[leg], p, other, form,
+                    temp, size,
+                )  # fmt: skip
+                _mul_c(s_lo, s_hi, form, sign, sign, form, size)
+                for j in range(size):
+                    m_lo = _max(s_lo[nat, j], s_lo[form, j])
+                    m_hi = _min(s_hi[nat, j], s_hi[form, j])
+                    # a NaN bound leaves the other enclosure, and so does an empty meet
+                    if not (m_lo != m_lo or m_hi != m_hi or m_lo > m_hi):
+                        s_lo[nat, j], s_hi[nat, j] = m_lo, m_hi
+        out_lo[s : s + size] = s_lo[nat, :size]
+        out_hi[s : s + size] = s_hi[nat, :size]
 
 
 # ------------------------------------------------------------------ reach
