@@ -7,12 +7,19 @@ compute with :class:`~moveability.intervals.Interval` operations (kept there as
 the reference, the ``_..._intervals`` methods): the same operations on the same
 operands in the same order, each rounded outwards by the compiled primitives
 of :mod:`moveability.intervals` that the Interval operators apply element by
-element (``interval_mul``, ``interval_add``, ``interval_sub``, ``next_below``,
-and the steps of ``intervals._trig_bounds`` for a cosine or sine). The bounds
-are thus the same floats, bit for bit (tests/mechanisms/test_five_bar_kernels.py
-compares them on random boxes of every kind). The kernels run box by box, each
-quantity a pair of floats in registers: no array is allocated per operation and
-no Python runs between the operations.
+element (``mul_into``, ``add_into``, ``sub_into``, ``interval_mul``,
+``interval_add``, ``interval_sub``; ``next_below`` in its inlined form
+``intervals._down``; the library functions' widening ``intervals._below`` with
+``_LIB_REL``; and the steps of ``intervals._trig_bounds`` for a cosine or sine,
+:func:`_trig`). The bounds are thus the same floats, bit for bit
+(tests/mechanisms/test_five_bar_kernels.py compares them on random boxes of
+every kind). det A runs chunk by chunk, one vectorised pass per operation
+(see "passes" below), the others box by box, each quantity a pair of floats:
+no array is allocated per operation and no Python runs between the operations.
+The sine and cosine of one angle may be computed by one call of the C
+library's ``sincos`` (the compiler merges them, :func:`_cos_sin`), which glibc
+computes as its ``sin`` and ``cos`` do, bit for bit (16 million arguments from 1
+to 1e300 compared on glibc 2.36; the tests compare the elbows too).
 
 Two library functions are left to numpy, between the kernels: ``arccos`` and
 ``arctan2``. numpy may evaluate them with its own vectorised code (SVML on
@@ -23,7 +30,8 @@ from its centre, for the same reason). The cosines and sines of angle
 enclosures are compiled in :mod:`moveability.intervals` already
 (``_trig_bounds``): :func:`_trig` repeats its steps.
 
-A leg enters as the float array of :func:`leg_constants`.
+A leg enters as the float array of ``RRLeg.constants`` (its entries are named
+below).
 """
 
 from __future__ import annotations
@@ -59,18 +67,13 @@ __all__ = [
     "reach_prepare",
 ]
 
-# the entries of a leg's constants (see RRLeg._constants): its base and lengths,
+# the entries of a leg's constants (see RRLeg.constants): its base and lengths,
 # then the Interval constants of branch_det, _alpha, reach and _fold_terms
 (
     BASE_X, BASE_Y, A, A2, B2, FOUR_A2, TOP, SHIFT_LO, SHIFT_HI, K_LO, K_HI, TWO_A,
     STAR_LO, STAR_HI, G_MIN, K_POSITIVE, OUT_LO, OUT_HI, IN_LO, IN_HI, SLOPE_LO, SLOPE_HI,
     N_CONSTANTS,
 ) = range(23)  # fmt: skip
-
-#: the reach codes of mechanisms.base (REGULAR, FOLD_OUTER, FOLD_INNER, REACH_OUT,
-#: REACH_UNKNOWN), passed in by the caller
-_CODES = 5
-
 
 @njit(cache=True, nogil=True, inline="always")
 def _next_below(x: float) -> float:  # pragma: no cover - compiled
@@ -102,17 +105,13 @@ def _lib_up(x: float) -> float:  # pragma: no cover - compiled
 @njit(cache=True, nogil=True, inline="always")
 def _max(a: float, b: float) -> float:  # pragma: no cover - compiled
     """``np.maximum`` of two floats: NaN if either is, else ``a`` when ``a >= b``."""
-    if a != a or b != b:
-        return np.nan
-    return a if a >= b else b
+    return np.nan if ((a != a) | (b != b)) else (a if a >= b else b)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
     """``np.minimum`` of two floats: NaN if either is, else ``a`` when ``a <= b``."""
-    if a != a or b != b:
-        return np.nan
-    return a if a <= b else b
+    return np.nan if ((a != a) | (b != b)) else (a if a <= b else b)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -128,7 +127,7 @@ def _div(
 ) -> tuple[float, float]:  # pragma: no cover - compiled
     """``Interval.__truediv__``: the product with ``[1 / hi, 1 / lo]`` rounded
     outwards, or with the whole line where the divisor may vanish."""
-    straddles = b_lo <= 0 and b_hi >= 0
+    straddles = (b_lo <= 0) & (b_hi >= 0)
     i_lo = -np.inf if straddles else _next_below(_reciprocal(b_hi))
     i_hi = np.inf if straddles else _up(_reciprocal(b_lo))
     return interval_mul(a_lo, a_hi, i_lo, i_hi)
@@ -138,7 +137,7 @@ def _div(
 def _square(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
     """``intervals.square``: ``x * x``, from 0 where ``x`` straddles 0."""
     s_lo, s_hi = interval_mul(lo, hi, lo, hi)
-    straddles = lo <= 0 and hi >= 0
+    straddles = (lo <= 0) & (hi >= 0)
     return (0.0 if straddles else _max(s_lo, 0.0)), s_hi
 
 
@@ -152,13 +151,13 @@ def _sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - co
 
 
 @njit(cache=True, nogil=True)
-def _trig(a: float, b: float, sine: bool) -> tuple[float, float]:  # pragma: no cover
-    """``intervals.sin`` (or ``cos``) of ``[a, b]``: the steps of one element of
-    ``intervals._trig_bounds``."""
+def _trig_bound(
+    fa: float, fb: float, a: float, b: float, sine: bool
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """One element of ``intervals._trig_bounds`` from the function's values ``fa``,
+    ``fb`` at the ends of ``[a, b]``."""
     top = 0.5 * np.pi if sine else 0.0
     bottom = -0.5 * np.pi if sine else np.pi
-    fa = np.sin(a) if sine else np.cos(a)
-    fb = np.sin(b) if sine else np.cos(b)
     if fa != fa or fb != fb:
         low = np.nan
         high = np.nan
@@ -180,15 +179,34 @@ def _trig(a: float, b: float, sine: bool) -> tuple[float, float]:  # pragma: no 
 
 
 @njit(cache=True, nogil=True)
+def _cos_sin(a: float, b: float) -> tuple[float, float, float, float]:  # pragma: no cover
+    """``intervals.cos`` and ``sin`` of ``[a, b]`` (:func:`_trig` of each), the
+    four library values in one function: the compiler may merge the sine and
+    cosine of one argument into one ``sincos`` call (see the module's notes)."""
+    ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
+    c_lo, c_hi = _trig_bound(ca, cb, a, b, False)
+    s_lo, s_hi = _trig_bound(sa, sb, a, b, True)
+    return c_lo, c_hi, s_lo, s_hi
+
+
+@njit(cache=True, nogil=True)
+def _trig(a: float, b: float, sine: bool) -> tuple[float, float]:  # pragma: no cover
+    """``intervals.sin`` (or ``cos``) of ``[a, b]``: the steps of one element of
+    ``intervals._trig_bounds``."""
+    fa = np.sin(a) if sine else np.cos(a)
+    fb = np.sin(b) if sine else np.cos(b)
+    return _trig_bound(fa, fb, a, b, sine)
+
+
+@njit(cache=True, nogil=True)
 def _knee(
     a_lo: float, a_hi: float, a: float, bx: float, by: float
 ) -> tuple[float, float, float, float, float, float, float, float]:  # pragma: no cover
     """``RRLeg.knee_boxes`` of one angle enclosure, for a leg of proximal length
     ``a`` and base ``(bx, by)``: ``c = cos * a``, ``s = sin * a``, then the elbow
     ``(c + bx, s + by)``."""
-    c_lo, c_hi = _trig(a_lo, a_hi, False)
+    c_lo, c_hi, s_lo, s_hi = _cos_sin(a_lo, a_hi)
     c_lo, c_hi = interval_mul(c_lo, c_hi, a, a)
-    s_lo, s_hi = _trig(a_lo, a_hi, True)
     s_lo, s_hi = interval_mul(s_lo, s_hi, a, a)
     x_lo, x_hi = interval_add(c_lo, c_hi, bx, bx)
     y_lo, y_hi = interval_add(s_lo, s_hi, by, by)
@@ -343,7 +361,7 @@ def _branch_form(
         e1_lo, e1_hi = _g(r_lo, r_lo, four_a2, shift_lo, shift_hi)
         e2_lo, e2_hi = _g(r_hi, r_hi, four_a2, shift_lo, shift_hi)
         ends_lo, ends_hi = _min(e1_lo, e2_lo), _max(e1_hi, e2_hi)
-        inside = r_lo <= top and r_hi >= top
+        inside = (r_lo <= top) & (r_hi >= top)
         lo[k, j], hi[k, j] = _sqrt(ends_lo, _max(ends_hi, g_top) if inside else ends_hi)
     _div_into(lo, hi, k, r2, k, w)
     # (Q - O) x (P - O) and (P - O) . (P - Q)
