@@ -199,33 +199,33 @@ def _trig(a: float, b: float, sine: bool) -> tuple[float, float]:  # pragma: no 
 
 
 @njit(cache=True, nogil=True)
-def _knee(
-    a_lo: float, a_hi: float, a: float, bx: float, by: float
-) -> tuple[float, float, float, float, float, float, float, float]:  # pragma: no cover
-    """``RRLeg.knee_boxes`` of one angle enclosure, for a leg of proximal length
-    ``a`` and base ``(bx, by)``: ``c = cos * a``, ``s = sin * a``, then the elbow
-    ``(c + bx, s + by)``."""
-    c_lo, c_hi, s_lo, s_hi = _cos_sin(a_lo, a_hi)
-    c_lo, c_hi = interval_mul(c_lo, c_hi, a, a)
-    s_lo, s_hi = interval_mul(s_lo, s_hi, a, a)
-    x_lo, x_hi = interval_add(c_lo, c_hi, bx, bx)
-    y_lo, y_hi = interval_add(s_lo, s_hi, by, by)
-    return c_lo, c_hi, s_lo, s_hi, x_lo, x_hi, y_lo, y_hi
-
-
-@njit(cache=True, nogil=True)
 def knee_bounds(
     a_lo: Array, a_hi: Array, leg: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
     """``RRLeg.knee_boxes`` of the flat angle enclosures ``[a_lo, a_hi]`` into
     ``out`` (4, n): ``cos * a``, ``sin * a``, and the elbow's x and y."""
     a, bx, by = leg[A], leg[BASE_X], leg[BASE_Y]
-    for j in range(a_lo.size):
-        c_lo, c_hi, s_lo, s_hi, x_lo, x_hi, y_lo, y_hi = _knee(a_lo[j], a_hi[j], a, bx, by)
+    n = a_lo.size
+    for j in range(n):
+        c_lo, c_hi, s_lo, s_hi = _cos_sin(a_lo[j], a_hi[j])
         out_lo[0, j], out_hi[0, j] = c_lo, c_hi
         out_lo[1, j], out_hi[1, j] = s_lo, s_hi
-        out_lo[2, j], out_hi[2, j] = x_lo, x_hi
-        out_lo[3, j], out_hi[3, j] = y_lo, y_hi
+    # the products and sums, one vectorised pass each
+    _knee_passes(out_lo, out_hi, np.int64(0), a, bx, by, n)
+
+
+@njit(cache=True, nogil=True)
+def _knee_passes(
+    lo: Array, hi: Array, c: Slot, a: float, bx: float, by: float, w: int
+) -> None:  # pragma: no cover - compiled
+    """``RRLeg.knee_boxes`` after its cosine and sine (in slots ``c``, ``c + 1``),
+    for a leg of proximal length ``a`` and base ``(bx, by)``: ``c = cos * a``, ``s =
+    sin * a`` in place, then the elbow ``(c + bx, s + by)`` into slots ``c + 2``,
+    ``c + 3``."""
+    _mul_c(lo, hi, c, a, a, c, w)
+    _mul_c(lo, hi, c + 1, a, a, c + 1, w)
+    _add_c(lo, hi, c, bx, bx, c + 2, w)
+    _add_c(lo, hi, c + 1, by, by, c + 3, w)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -281,6 +281,16 @@ def _mul_c(
     a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
     for j in range(w):
         o_lo[j], o_hi[j] = interval_mul(a_lo[j], a_hi[j], c_lo, c_hi)
+
+
+@njit(cache=True, nogil=True)
+def _add_c(
+    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = slot ``a`` + the interval ``[c_lo, c_hi]``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_add(a_lo[j], a_hi[j], c_lo, c_hi)
 
 
 @njit(cache=True, nogil=True)
@@ -382,8 +392,9 @@ def _branch_form(
     _add(lo, hi, u, v, o, w)
 
 
-# the slots of det_a_bounds
-_P, _ANG, _KNEE, _ROWS, _NAT, _FORM, _TEMP = 0, 2, 4, 8, 14, 15, 16
+# the slots of det_a_bounds: the box; the legs' cos, sin and elbows (leg k's
+# elbow at _TRIG + 4 k + 2); the rows and their products; det A; a branch form
+_P, _TRIG, _ROWS, _NAT, _FORM, _TEMP = 0, 2, 10, 16, 17, 18
 _SLOTS = _TEMP + 17
 
 
@@ -408,7 +419,8 @@ def det_a_bounds(
     w = _CHUNK
     s_lo, s_hi = np.empty((_SLOTS, w)), np.empty((_SLOTS, w))
     # the slots as run-time integers
-    p, knee, rows = np.int64(_P), np.int64(_KNEE), np.int64(_ROWS)
+    p, trig, rows = np.int64(_P), np.int64(_TRIG), np.int64(_ROWS)
+    elbows = (trig + 2, trig + 6)
     nat, form, temp = np.int64(_NAT), np.int64(_FORM), np.int64(_TEMP)
     g_top = np.empty(2)
     for leg in range(2):
@@ -423,23 +435,21 @@ def det_a_bounds(
         for j in range(size):
             s_lo[p, j], s_hi[p, j] = lo[s + j, 0], hi[s + j, 0]
             s_lo[p + 1, j], s_hi[p + 1, j] = lo[s + j, 1], hi[s + j, 1]
-        for j in range(size):
-            _, _, _, _, x_lo, x_hi, y_lo, y_hi = _knee(
-                angles_lo[0, s + j], angles_hi[0, s + j], a0, bx0, by0
-            )
-            s_lo[knee, j], s_hi[knee, j] = x_lo, x_hi
-            s_lo[knee + 1, j], s_hi[knee + 1, j] = y_lo, y_hi
-        for j in range(size):
-            _, _, _, _, x_lo, x_hi, y_lo, y_hi = _knee(
-                angles_lo[1, s + j], angles_hi[1, s + j], a1, bx1, by1
-            )
-            s_lo[knee + 2, j], s_hi[knee + 2, j] = x_lo, x_hi
-            s_lo[knee + 3, j], s_hi[knee + 3, j] = y_lo, y_hi
+        # the elbows: cosine and sine box by box, then vectorised passes; leg
+        # k's cos, sin in slots trig + 4 k, + 1, its elbow x, y in + 2, + 3
+        for leg in range(2):
+            at = trig + 4 * leg
+            for j in range(size):
+                c_lo, c_hi, n_lo, n_hi = _cos_sin(angles_lo[leg, s + j], angles_hi[leg, s + j])
+                s_lo[at, j], s_hi[at, j] = c_lo, c_hi
+                s_lo[at + 1, j], s_hi[at + 1, j] = n_lo, n_hi
+        _knee_passes(s_lo, s_hi, trig, a0, bx0, by0, size)
+        _knee_passes(s_lo, s_hi, trig + 4, a1, bx1, by1, size)
         # the rows P - C, P - D and their determinant
-        _sub(s_lo, s_hi, p, knee, rows, size)
-        _sub(s_lo, s_hi, p + 1, knee + 1, rows + 1, size)
-        _sub(s_lo, s_hi, p, knee + 2, rows + 2, size)
-        _sub(s_lo, s_hi, p + 1, knee + 3, rows + 3, size)
+        _sub(s_lo, s_hi, p, elbows[0], rows, size)
+        _sub(s_lo, s_hi, p + 1, elbows[0] + 1, rows + 1, size)
+        _sub(s_lo, s_hi, p, elbows[1], rows + 2, size)
+        _sub(s_lo, s_hi, p + 1, elbows[1] + 1, rows + 3, size)
         _mul(s_lo, s_hi, rows, rows + 3, rows + 4, size)
         _mul(s_lo, s_hi, rows + 1, rows + 2, rows + 5, size)
         _sub(s_lo, s_hi, rows + 4, rows + 5, nat, size)
@@ -447,7 +457,7 @@ def det_a_bounds(
             for leg in range(2):
                 side = 1.0 if branches[leg] == 0 else -1.0
                 sign = 1.0 if leg == 0 else -1.0
-                other = knee + 2 * (1 - leg)
+                other = elbows[1 - leg]
                 _branch_form(
                     s_lo, s_hi, leg0 if leg == 0 else leg1, side, g_top[leg], p, other, form,
                     temp, size,
