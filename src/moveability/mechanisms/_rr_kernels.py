@@ -486,47 +486,83 @@ def _near_far(
 
 
 @njit(cache=True, nogil=True)
-def _distances(
-    lo: Array, hi: Array, j: int, leg: Array
-) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """The squared distances of box ``j``'s nearest point and farthest corner from
-    the base: ``square(near - base)`` summed over the axes, and so for ``far``."""
-    nx, fx = _near_far(lo[j, 0], hi[j, 0], leg[BASE_X])
-    ny, fy = _near_far(lo[j, 1], hi[j, 1], leg[BASE_Y])
-    a_lo, a_hi = interval_sub(nx, nx, leg[BASE_X], leg[BASE_X])
-    b_lo, b_hi = interval_sub(ny, ny, leg[BASE_Y], leg[BASE_Y])
-    a_lo, a_hi = _square(a_lo, a_hi)
-    b_lo, b_hi = _square(b_lo, b_hi)
-    n_lo, n_hi = interval_add(a_lo, a_hi, b_lo, b_hi)
-    a_lo, a_hi = interval_sub(fx, fx, leg[BASE_X], leg[BASE_X])
-    b_lo, b_hi = interval_sub(fy, fy, leg[BASE_Y], leg[BASE_Y])
-    a_lo, a_hi = _square(a_lo, a_hi)
-    b_lo, b_hi = _square(b_lo, b_hi)
-    f_lo, f_hi = interval_add(a_lo, a_hi, b_lo, b_hi)
-    return n_lo, n_hi, f_lo, f_hi
+def _sqrt_into(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = ``intervals.sqrt`` of slot ``a``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = _sqrt(a_lo[j], a_hi[j])
+
+
+# the slots of the legs' chunks (_leg_chunk): the box (x, y); its nearest point and
+# farthest corner (x, y each); their squared distances from the base, and g of
+# them; the box about the base (dx, dy); scratch; the constants 2a and k; then
+# what reach_prepare or fold_terms_prepare add
+_LP, _LNEAR, _LFAR, _LN2, _LF2, _LGN, _LGF, _LDX, _LDY = 0, 2, 4, 6, 7, 8, 9, 10, 11
+_LA, _LB, _LR, _LTWO_A, _LK, _LMORE = 12, 13, 14, 15, 16, 17
+_LSLOTS = _LMORE + 4
 
 
 @njit(cache=True, nogil=True)
-def _g_alpha(rho2_lo: float, rho2_hi: float, leg: Array) -> tuple[float, float]:  # pragma: no cover
-    """``RRLeg._alpha``'s ``g(rho2) = rho / 2a + k / rho``, ``rho = sqrt(rho2)``."""
-    r_lo, r_hi = _sqrt(rho2_lo, rho2_hi)
-    p_lo, p_hi = _div(r_lo, r_hi, leg[TWO_A], leg[TWO_A])
-    q_lo, q_hi = _div(leg[K_LO], leg[K_HI], r_lo, r_hi)
-    return interval_add(p_lo, p_hi, q_lo, q_hi)
+def _distance_g(
+    lo: Array, hi: Array, point: Slot, rho2: Slot, g: Slot, bx: float, by: float, w: int
+) -> None:  # pragma: no cover - compiled
+    """The squared distance from the base ``(bx, by)`` of the point in slots
+    ``point``, ``point + 1`` into ``rho2``, and ``g`` of it into slot ``g``."""
+    a, b, r = np.int64(_LA), np.int64(_LB), np.int64(_LR)
+    _sub_c(lo, hi, point, bx, bx, a, w)
+    _square_into(lo, hi, a, a, w)
+    _sub_c(lo, hi, point + 1, by, by, b, w)
+    _square_into(lo, hi, b, b, w)
+    _add(lo, hi, a, b, rho2, w)
+    _sqrt_into(lo, hi, rho2, r, w)
+    _div_into(lo, hi, r, np.int64(_LTWO_A), a, w)
+    _div_into(lo, hi, np.int64(_LK), r, b, w)
+    _add(lo, hi, a, b, g, w)
+
+
+@njit(cache=True, nogil=True)
+def _leg_chunk(
+    box_lo: Array, box_hi: Array, s: int, w: int, leg: Array, lo: Array, hi: Array
+) -> None:  # pragma: no cover - compiled
+    """What ``RRLeg.reach`` and ``_fold_terms`` share, for the boxes ``s:s + w``
+    into the slots above: the squared distances ``near2``, ``far2`` of the box's
+    point nearest the base (``np.clip``) and corner farthest from it
+    (``square(near - base)`` summed over the axes), ``g`` of each
+    (``RRLeg._alpha``: ``rho / 2a + k / rho``, ``rho = sqrt(rho2)``), and ``dx``,
+    ``dy`` (the box less the base)."""
+    bx, by = leg[BASE_X], leg[BASE_Y]
+    for j in range(w):
+        x_lo, x_hi = box_lo[s + j, 0], box_hi[s + j, 0]
+        y_lo, y_hi = box_lo[s + j, 1], box_hi[s + j, 1]
+        lo[_LP, j], hi[_LP, j] = x_lo, x_hi
+        lo[_LP + 1, j], hi[_LP + 1, j] = y_lo, y_hi
+        nx, fx = _near_far(x_lo, x_hi, bx)
+        ny, fy = _near_far(y_lo, y_hi, by)
+        lo[_LNEAR, j], hi[_LNEAR, j] = nx, nx
+        lo[_LNEAR + 1, j], hi[_LNEAR + 1, j] = ny, ny
+        lo[_LFAR, j], hi[_LFAR, j] = fx, fx
+        lo[_LFAR + 1, j], hi[_LFAR + 1, j] = fy, fy
+    lo[_LTWO_A, :w] = leg[TWO_A]
+    hi[_LTWO_A, :w] = leg[TWO_A]
+    lo[_LK, :w] = leg[K_LO]
+    hi[_LK, :w] = leg[K_HI]
+    _distance_g(lo, hi, np.int64(_LNEAR), np.int64(_LN2), np.int64(_LGN), bx, by, w)
+    _distance_g(lo, hi, np.int64(_LFAR), np.int64(_LF2), np.int64(_LGF), bx, by, w)
+    _sub_c(lo, hi, np.int64(_LP), bx, bx, np.int64(_LDX), w)
+    _sub_c(lo, hi, np.int64(_LP + 1), by, by, np.int64(_LDY), w)
 
 
 @njit(cache=True, nogil=True)
 def _arccos_args(
-    n_lo: float, n_hi: float, f_lo: float, f_hi: float, leg: Array
+    lo: Array, hi: Array, j: int, leg: Array
 ) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``RRLeg._alpha`` up to its arccos: the clipped arguments whose arccos are the
-    lower and upper bounds of alpha (of the upper and lower bounds of g)."""
-    gn_lo, gn_hi = _g_alpha(n_lo, n_hi, leg)
-    gf_lo, gf_hi = _g_alpha(f_lo, f_hi, leg)
-    g_lo = _min(gn_lo, gf_lo)
-    g_hi = _max(gn_hi, gf_hi)
+    """``RRLeg._alpha`` up to its arccos, for box ``j`` of a chunk (:func:`_leg_chunk`):
+    the clipped arguments whose arccos are the lower and upper bounds of alpha (of
+    the upper and lower bounds of g)."""
+    g_lo = _min(lo[_LGN, j], lo[_LGF, j])
+    g_hi = _max(hi[_LGN, j], hi[_LGF, j])
     if leg[K_POSITIVE] > 0:
-        inside = n_lo <= leg[STAR_HI] and f_hi >= leg[STAR_LO]
+        inside = lo[_LN2, j] <= leg[STAR_HI] and hi[_LF2, j] >= leg[STAR_LO]
         if inside:
             g_lo = _min(g_lo, leg[G_MIN])
     g_lo = -np.inf if g_lo != g_lo else g_lo
@@ -558,37 +594,49 @@ def reach_prepare(
     arccos (:func:`_arccos_args`) and the bounds of ``ux``, ``uy``, the box
     about the base rotated by the direction ``(cs, sn)`` of its centre (whose
     corners' arctan2 give the direction's enclosure)."""
-    for j in range(lo.shape[0]):
-        n_lo, n_hi, f_lo, f_hi = _distances(lo, hi, j, leg)
-        out_lo, out_hi = leg[OUT_LO], leg[OUT_HI]
-        in_lo, in_hi = leg[IN_LO], leg[IN_HI]
-        away = (n_lo > out_hi) or (f_hi < in_lo)
-        regular = (n_lo > in_hi) and (f_hi < out_lo) and (n_lo > 0)
-        straddle_out = (n_hi < out_lo) and (f_lo > out_hi)
-        straddle_in = (n_hi < in_lo) and (f_lo > in_hi)
-        fold_outer = straddle_out and (n_lo > in_hi) and not away
-        fold_inner = straddle_in and (f_hi < out_lo) and not away and (in_lo > 0)
-        code = codes[4]
-        if fold_inner:
-            code = codes[2]
-        if fold_outer:
-            code = codes[1]
-        if regular:
-            code = codes[0]
-        if away:
-            code = codes[3]
-        status[j] = code
-        out[0, j], out[1, j] = _arccos_args(n_lo, n_hi, f_lo, f_hi, leg)
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_LSLOTS, w)), np.empty((_LSLOTS, w))
+    cs_at, sn_at, ux, uy = _LMORE, _LMORE + 1, _LMORE + 2, _LMORE + 3
+    a, b = np.int64(_LA), np.int64(_LB)
+    out_lo, out_hi = leg[OUT_LO], leg[OUT_HI]
+    in_lo, in_hi = leg[IN_LO], leg[IN_HI]
+    n = lo.shape[0]
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        _leg_chunk(lo, hi, s, size, leg, s_lo, s_hi)
+        for j in range(size):
+            n_lo, n_hi = s_lo[_LN2, j], s_hi[_LN2, j]
+            f_lo, f_hi = s_lo[_LF2, j], s_hi[_LF2, j]
+            away = (n_lo > out_hi) or (f_hi < in_lo)
+            regular = (n_lo > in_hi) and (f_hi < out_lo) and (n_lo > 0)
+            straddle_out = (n_hi < out_lo) and (f_lo > out_hi)
+            straddle_in = (n_hi < in_lo) and (f_lo > in_hi)
+            fold_outer = straddle_out and (n_lo > in_hi) and not away
+            fold_inner = straddle_in and (f_hi < out_lo) and not away and (in_lo > 0)
+            code = codes[4]
+            if fold_inner:
+                code = codes[2]
+            if fold_outer:
+                code = codes[1]
+            if regular:
+                code = codes[0]
+            if away:
+                code = codes[3]
+            status[s + j] = code
+            out[0, s + j], out[1, s + j] = _arccos_args(s_lo, s_hi, j, leg)
+            s_lo[cs_at, j], s_hi[cs_at, j] = cs[s + j], cs[s + j]
+            s_lo[sn_at, j], s_hi[sn_at, j] = sn[s + j], sn[s + j]
         # the box about the base, turned by the direction of its centre
-        x_lo, x_hi = interval_sub(lo[j, 0], hi[j, 0], leg[BASE_X], leg[BASE_X])
-        y_lo, y_hi = interval_sub(lo[j, 1], hi[j, 1], leg[BASE_Y], leg[BASE_Y])
-        c, s = cs[j], sn[j]
-        p_lo, p_hi = interval_mul(x_lo, x_hi, c, c)
-        q_lo, q_hi = interval_mul(y_lo, y_hi, s, s)
-        out[2, j], out[3, j] = interval_add(p_lo, p_hi, q_lo, q_hi)
-        p_lo, p_hi = interval_mul(y_lo, y_hi, c, c)
-        q_lo, q_hi = interval_mul(x_lo, x_hi, s, s)
-        out[4, j], out[5, j] = interval_sub(p_lo, p_hi, q_lo, q_hi)
+        _mul(s_lo, s_hi, np.int64(_LDX), np.int64(cs_at), a, size)
+        _mul(s_lo, s_hi, np.int64(_LDY), np.int64(sn_at), b, size)
+        _add(s_lo, s_hi, a, b, np.int64(ux), size)
+        _mul(s_lo, s_hi, np.int64(_LDY), np.int64(cs_at), a, size)
+        _mul(s_lo, s_hi, np.int64(_LDX), np.int64(sn_at), b, size)
+        _sub(s_lo, s_hi, a, b, np.int64(uy), size)
+        out[2, s : s + size] = s_lo[ux, :size]
+        out[3, s : s + size] = s_hi[ux, :size]
+        out[4, s : s + size] = s_lo[uy, :size]
+        out[5, s : s + size] = s_hi[uy, :size]
 
 
 #: ``reach``'s enclosure of 2 pi
@@ -675,22 +723,33 @@ def fold_terms_prepare(
     """``RRLeg._fold_terms`` up to its arccos: ``dx``, ``dy``, ``rho``, ``rho2`` and
     the slope ``g'(rho)`` over the (n, 2) boxes into ``terms`` (5, n), the
     arguments of alpha's arccos into ``args`` (2, n)."""
-    for j in range(lo.shape[0]):
-        x_lo, x_hi = interval_sub(lo[j, 0], hi[j, 0], leg[BASE_X], leg[BASE_X])
-        y_lo, y_hi = interval_sub(lo[j, 1], hi[j, 1], leg[BASE_Y], leg[BASE_Y])
-        a_lo, a_hi = _square(x_lo, x_hi)
-        b_lo, b_hi = _square(y_lo, y_hi)
-        r2_lo, r2_hi = interval_add(a_lo, a_hi, b_lo, b_hi)
-        r_lo, r_hi = _sqrt(r2_lo, r2_hi)
-        q_lo, q_hi = _div(leg[K_LO], leg[K_HI], r2_lo, r2_hi)
-        s_lo, s_hi = interval_sub(leg[SLOPE_LO], leg[SLOPE_HI], q_lo, q_hi)
-        terms_lo[DX, j], terms_hi[DX, j] = x_lo, x_hi
-        terms_lo[DY, j], terms_hi[DY, j] = y_lo, y_hi
-        terms_lo[RHO, j], terms_hi[RHO, j] = r_lo, r_hi
-        terms_lo[RHO2, j], terms_hi[RHO2, j] = r2_lo, r2_hi
-        terms_lo[SCALE, j], terms_hi[SCALE, j] = s_lo, s_hi
-        n_lo, n_hi, f_lo, f_hi = _distances(lo, hi, j, leg)
-        args[0, j], args[1, j] = _arccos_args(n_lo, n_hi, f_lo, f_hi, leg)
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_LSLOTS, w)), np.empty((_LSLOTS, w))
+    a, b = np.int64(_LA), np.int64(_LB)
+    rho2, rho = np.int64(_LMORE), np.int64(_LMORE + 1)
+    q, slope = np.int64(_LMORE + 2), np.int64(_LMORE + 3)
+    n = lo.shape[0]
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        _leg_chunk(lo, hi, s, size, leg, s_lo, s_hi)
+        _square_into(s_lo, s_hi, np.int64(_LDX), a, size)
+        _square_into(s_lo, s_hi, np.int64(_LDY), b, size)
+        _add(s_lo, s_hi, a, b, rho2, size)
+        _sqrt_into(s_lo, s_hi, rho2, rho, size)
+        _div_into(s_lo, s_hi, np.int64(_LK), rho2, q, size)
+        _c_sub(s_lo, s_hi, leg[SLOPE_LO], leg[SLOPE_HI], q, slope, size)
+        terms_lo[DX, s : s + size] = s_lo[_LDX, :size]
+        terms_hi[DX, s : s + size] = s_hi[_LDX, :size]
+        terms_lo[DY, s : s + size] = s_lo[_LDY, :size]
+        terms_hi[DY, s : s + size] = s_hi[_LDY, :size]
+        terms_lo[RHO, s : s + size] = s_lo[rho, :size]
+        terms_hi[RHO, s : s + size] = s_hi[rho, :size]
+        terms_lo[RHO2, s : s + size] = s_lo[rho2, :size]
+        terms_hi[RHO2, s : s + size] = s_hi[rho2, :size]
+        terms_lo[SCALE, s : s + size] = s_lo[slope, :size]
+        terms_hi[SCALE, s : s + size] = s_hi[slope, :size]
+        for j in range(size):
+            args[0, s + j], args[1, s + j] = _arccos_args(s_lo, s_hi, j, leg)
 
 
 @njit(cache=True, nogil=True)
