@@ -150,7 +150,7 @@ def _sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - co
     return _max(low, 0.0), high
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _trig_bound(
     fa: float, fb: float, a: float, b: float, sine: bool
 ) -> tuple[float, float]:  # pragma: no cover - compiled
