@@ -366,12 +366,19 @@ def _branch_form(
     # k: the square root of the range of g over rho (its ends, and its top where
     # rho may reach a^2 + b^2), over 2 rho
     top, four_a2, shift_lo, shift_hi = leg[TOP], leg[FOUR_A2], leg[SHIFT_LO], leg[SHIFT_HI]
+    # g(r) = r 4a^2 - square(r + shift) at each end r of rho (as [r, r]): into u, v
+    for end in range(2):
+        e = u if end == 0 else v
+        for j in range(w):
+            r = lo[rho, j] if end == 0 else hi[rho, j]
+            lo[wx, j], hi[wx, j] = r, r
+        _mul_c(lo, hi, wx, four_a2, four_a2, wy, w)
+        _add_c(lo, hi, wx, shift_lo, shift_hi, dot, w)
+        _square_into(lo, hi, dot, dot, w)
+        _sub(lo, hi, wy, dot, e, w)
     for j in range(w):
-        r_lo, r_hi = lo[rho, j], hi[rho, j]
-        e1_lo, e1_hi = _g(r_lo, r_lo, four_a2, shift_lo, shift_hi)
-        e2_lo, e2_hi = _g(r_hi, r_hi, four_a2, shift_lo, shift_hi)
-        ends_lo, ends_hi = _min(e1_lo, e2_lo), _max(e1_hi, e2_hi)
-        inside = (r_lo <= top) & (r_hi >= top)
+        ends_lo, ends_hi = _min(lo[u, j], lo[v, j]), _max(hi[u, j], hi[v, j])
+        inside = (lo[rho, j] <= top) & (hi[rho, j] >= top)
         lo[k, j], hi[k, j] = _sqrt(ends_lo, _max(ends_hi, g_top) if inside else ends_hi)
     _div_into(lo, hi, k, r2, k, w)
     # (Q - O) x (P - O) and (P - O) . (P - Q)
