@@ -10,8 +10,10 @@ of :mod:`moveability.intervals` that the Interval operators apply element by
 element (``mul_into``, ``add_into``, ``sub_into``, ``interval_mul``,
 ``interval_add``, ``interval_sub``; ``next_below`` in its inlined form
 ``intervals._down``; the library functions' widening ``intervals._below`` with
-``_LIB_REL``; and the steps of ``intervals._trig_bounds`` for a cosine or sine,
-:func:`_trig`). The bounds are thus the same floats, bit for bit
+``_rel(4)``; and the steps of ``intervals._trig_bounds`` for a cosine or sine,
+:func:`_trig`). The private ones (``_below``, ``_down``, ``_holds_angle`` and
+their constants) are repeated below, the project importing no private name
+from another module. The bounds are thus the same floats, bit for bit
 (tests/mechanisms/test_five_bar_kernels.py compares them on random boxes of
 every kind). det A runs chunk by chunk, one vectorised pass per operation
 (see "passes" below), the others box by box, each quantity a pair of floats:
@@ -41,13 +43,6 @@ from numba import njit
 from numpy.typing import NDArray
 
 from ..intervals import (
-    _LIB_REL,
-    _LIB_TINY,
-    _PI_UP,
-    _TWO_PI,
-    _below,
-    _down,
-    _holds_angle,
     add_into,
     interval_add,
     interval_mul,
@@ -74,6 +69,63 @@ __all__ = [
     STAR_LO, STAR_HI, G_MIN, K_POSITIVE, OUT_LO, OUT_HI, IN_LO, IN_HI, SLOPE_LO, SLOPE_HI,
     N_CONSTANTS,
 ) = range(23)  # fmt: skip
+
+# ------------------------------------------------------------------ rounding
+# The private rounding steps of moveability.intervals, repeated here (the project
+# imports no private name from another module): the same source, so the same
+# floats; the tests compare the kernels with the Interval code, which uses the
+# originals.
+
+_PI_UP = float(np.nextafter(np.pi, np.inf))
+_TWO_PI = 2.0 * np.pi
+_MAX = float(np.finfo(np.float64).max)
+#: beyond this magnitude a widening away from zero gives the infinity
+_HUGE = _MAX / 2.0
+#: the smallest positive subnormal
+_TINY = 5e-324
+#: ``intervals._rel(1)`` and the widening of the library functions, ``_rel(4)``
+#: and 4 ulps of ``_TINY``
+_REL_1 = 2 * 2.0**-52
+_LIB_REL = 5 * 2.0**-52
+_LIB_TINY = 4 * _TINY
+
+
+@njit(cache=True, nogil=True)
+def _below(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
+    """``intervals._below``: ``x`` moved down by ``|x| * rel + tiny``; a zero kept
+    when ``keep_zero``."""
+    if x != x or (keep_zero and x == 0.0):
+        return x
+    if x > _MAX:
+        # +inf: an overflow, the exact value is finite and above; one float below is
+        # the largest, more than one (tiny holds the number of ulps) are further
+        if tiny <= _TINY:
+            return _MAX
+        x = _MAX
+    if x < -_HUGE:
+        return -np.inf
+    return x - (abs(x) * rel + tiny)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _down(x: float, keep_zero: bool) -> float:  # pragma: no cover - compiled
+    """``intervals._down``: :func:`_below` by one ulp (or a few), inlined, without
+    jumps on the data (selects)."""
+    y = x - (abs(x) * _REL_1 + _TINY)
+    y = -np.inf if x < -_HUGE else y
+    y = _MAX if x > _MAX else y  # +inf: an overflow, the exact value is finite
+    return x if (x != x or (keep_zero and x == 0.0)) else y
+
+
+@njit(cache=True, nogil=True)
+def _holds_angle(lo: float, hi: float, phase: float) -> bool:  # pragma: no cover - compiled
+    """``intervals._holds_angle``: whether ``[lo, hi]`` may contain an angle ``phase
+    + 2 k pi`` (conservative)."""
+    # the quotient's rounding error grows with |x|: the margin is relative
+    tol = 1e-12 * max(1.0, max(abs(lo), abs(hi)))
+    k = np.ceil((lo - tol - phase) / _TWO_PI)
+    return phase + k * _TWO_PI <= hi + tol
+
 
 @njit(cache=True, nogil=True, inline="always")
 def _next_below(x: float) -> float:  # pragma: no cover - compiled
