@@ -15,9 +15,10 @@ from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
 from ..types import Array
+from . import _rr_kernels as kernels
 from .base import Mechanism, interval_det
 from .constraints import Linkage, Turning, fixed_point
-from .rr_leg import RRLeg
+from .rr_leg import RRLeg, flat_bounds, pose_boxes
 
 __all__ = ["FiveBar"]
 
@@ -65,6 +66,8 @@ class FiveBar(Mechanism):
             RRLeg((float(L0), 0.0), float(L3), float(L4), "theta2"),
         )
         self.legs = self.rr_legs
+        #: the legs as :func:`._rr_kernels.det_a_bounds` takes them
+        self._leg_constants = np.stack([leg.constants for leg in self.rr_legs])
         if limits is None:
             limits = (JointLimit(0.0, np.pi), JointLimit(0.0, np.pi))
         if len(limits) != 2:
@@ -126,9 +129,48 @@ class FiveBar(Mechanism):
         """Enclosure of det A over boxes: the rows stacked and, for a known
         posture, intersected with one form per leg in which its branch appears
         as a sign (:func:`branch_det`): sharp where a leg folds, where the
-        elbow's angle enclosure is wide but its side is not."""
+        elbow's angle enclosure is wide but its side is not.
+
+        One compiled pass over the boxes (:func:`._rr_kernels.det_a_bounds`): the
+        bounds of :meth:`_det_a_boxes_intervals`, bit for bit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> m = FiveBar()
+        >>> lo, hi = np.array([[3.0, 8.5]]), np.array([[3.5, 9.0]])
+        >>> point = np.array([[3.2, 8.7]])
+        >>> q = m.joint_angles(point)[0]  # (postures, legs)
+        >>> angles = [leg.reach(lo, hi).branches[int(b)] for leg, b in zip(m.legs, m.postures[0])]
+        >>> det = m.det_a_boxes(lo, hi, angles, posture=0)
+        >>> bool(det.lo[0] <= m.det_a(point, q[:1])[0] <= det.hi[0])
+        True
+        """
+        boxes = pose_boxes(lo, hi)
+        if boxes is None or len(angles) != 2:
+            return self._det_a_boxes_intervals(lo, hi, angles, posture)
+        n = boxes[0].shape[0]
+        parts = [flat_bounds(a, n) for a in angles]
+        if parts[0] is None or parts[1] is None:
+            return self._det_a_boxes_intervals(lo, hi, angles, posture)
+        angles_lo = np.stack([parts[0][0], parts[1][0]])
+        angles_hi = np.stack([parts[0][1], parts[1][1]])
+        if posture is None:
+            branches = np.full(2, -1, dtype=np.int64)
+        else:
+            branches = np.asarray(self.postures[posture], dtype=np.int64)
+        out_lo, out_hi = np.empty(n), np.empty(n)
+        kernels.det_a_bounds(
+            *boxes, angles_lo, angles_hi, self._leg_constants, branches, out_lo, out_hi
+        )
+        return Interval(out_lo, out_hi)
+
+    def _det_a_boxes_intervals(
+        self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
+    ) -> Interval:
+        """:meth:`det_a_boxes` by :class:`Interval` operations (the reference)."""
         # the elbows once: the rows P - C, P - D (as each leg's a_row_boxes) and the forms
-        knees = [leg.knee_boxes(angles[i])[0] for i, leg in enumerate(self.rr_legs)]
+        knees = [leg._knee_boxes_intervals(angles[i])[0] for i, leg in enumerate(self.rr_legs)]
         pose = [Interval(lo[:, 0], hi[:, 0]), Interval(lo[:, 1], hi[:, 1])]
         out = interval_det([[pose[0] - knee[0], pose[1] - knee[1]] for knee in knees])
         if posture is None:

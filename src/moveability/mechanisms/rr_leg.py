@@ -12,6 +12,7 @@ stretched) and ``rho = |a - b|`` (the leg folded).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -21,9 +22,42 @@ from .. import intervals as iv
 from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..types import Array
+from . import _rr_kernels as kernels
 from .base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, LegReach
 
 __all__ = ["RRLeg"]
+
+#: the reach codes, in the order the kernels of :mod:`._rr_kernels` take them
+_CODES = np.array([REGULAR, FOLD_OUTER, FOLD_INNER, REACH_OUT, REACH_UNKNOWN], dtype=np.uint8)
+
+
+def pose_boxes(lo: Array, hi: Array) -> tuple[Array, Array] | None:
+    """Boxes of planar poses as the compiled kernels take them: (n, 2)
+    C-contiguous float arrays of one shape; None for anything else (the
+    Interval code takes it)."""
+    lo_a, hi_a = np.asarray(lo), np.asarray(hi)
+    if lo_a.ndim != 2 or lo_a.shape[1] != 2 or lo_a.shape != hi_a.shape:
+        return None
+    return (
+        np.ascontiguousarray(lo_a, dtype=np.float64),
+        np.ascontiguousarray(hi_a, dtype=np.float64),
+    )
+
+
+def flat_bounds(x: Interval, n: int) -> tuple[Array, Array] | None:
+    """The bounds of ``x`` broadcast to (n,), contiguous; None where they do not
+    broadcast to it."""
+    x = iv.as_interval(x)
+    if x.lo.ndim > 1 or x.hi.ndim > 1:
+        return None
+    try:
+        lo, hi = np.broadcast_to(x.lo, (n,)), np.broadcast_to(x.hi, (n,))
+    except ValueError:
+        return None
+    return (
+        np.ascontiguousarray(lo, dtype=np.float64),
+        np.ascontiguousarray(hi, dtype=np.float64),
+    )
 
 
 @dataclass(frozen=True)
@@ -62,6 +96,52 @@ class RRLeg:
                     f"{self.joint} {name} length", "a positive length", value
                 )
 
+    @cached_property
+    def constants(self) -> Array:
+        """The leg as the kernels of :mod:`._rr_kernels` take it: its base and
+        lengths, and the enclosures of the constants of :func:`.five_bar.branch_det`,
+        :meth:`_alpha`, :meth:`reach` and :meth:`_fold_terms`, computed by the same
+        Interval operations as there."""
+        a, b = self.proximal, self.distal
+        a2, b2 = self.proximal**2, self.distal**2
+        out = np.zeros(kernels.N_CONSTANTS)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            shift = iv.as_interval(a2) - b2
+            k = (iv.as_interval(a) * a - iv.as_interval(b) * b) / (2.0 * a)
+            star = iv.as_interval(2.0 * a) * k
+            g_min = iv.sqrt(k * 2.0 / a).lo
+            r_out2 = iv.square(iv.as_interval(a) + b)
+            r_in2 = iv.square(iv.as_interval(a) - b)
+            slope = 1.0 / (2.0 * iv.as_interval(a))
+        values: dict[int, Any] = {
+            kernels.BASE_X: self.base[0],
+            kernels.BASE_Y: self.base[1],
+            kernels.A: a,
+            kernels.A2: a2,
+            kernels.B2: b2,
+            kernels.FOUR_A2: 4.0 * a2,
+            kernels.TOP: a2 + b2,
+            kernels.SHIFT_LO: shift.lo,
+            kernels.SHIFT_HI: shift.hi,
+            kernels.K_LO: k.lo,
+            kernels.K_HI: k.hi,
+            kernels.TWO_A: 2.0 * a,
+            kernels.STAR_LO: star.lo,
+            kernels.STAR_HI: star.hi,
+            kernels.G_MIN: g_min,
+            kernels.K_POSITIVE: 1.0 if k.lo > 0 else 0.0,
+            kernels.OUT_LO: r_out2.lo,
+            kernels.OUT_HI: r_out2.hi,
+            kernels.IN_LO: r_in2.lo,
+            kernels.IN_HI: r_in2.hi,
+            kernels.SLOPE_LO: slope.lo,
+            kernels.SLOPE_HI: slope.hi,
+        }
+        for index, value in values.items():
+            out[index] = float(value)
+        out.flags.writeable = False
+        return out
+
     # ------------------------------------------------------------- points
     def elbow(self, angles: Array) -> Array:
         """Elbow positions ``C(t)`` for joint angles, shape (..., 2)."""
@@ -74,7 +154,24 @@ class RRLeg:
     def knee_boxes(self, angles: Interval) -> tuple[list[Interval], ...]:
         """The elbow ``C(t)`` and its first two derivatives along ``t`` over angle
         enclosures: ``([Cx, Cy], [Cx', Cy'], [Cx'', Cy''])``; the distal link
-        joins the elbow to the platform point (see :mod:`moveability.analysis.joint_space`)."""
+        joins the elbow to the platform point (see :mod:`moveability.analysis.joint_space`).
+
+        One compiled pass (:func:`._rr_kernels.knee_bounds`): the bounds of
+        :meth:`_knee_boxes_intervals`, bit for bit."""
+        angles = iv.as_interval(angles)
+        lo, hi = np.broadcast_arrays(angles.lo, angles.hi)
+        shape = lo.shape
+        flat_lo = np.ascontiguousarray(lo, dtype=np.float64).reshape(-1)
+        flat_hi = np.ascontiguousarray(hi, dtype=np.float64).reshape(-1)
+        out_lo, out_hi = np.empty((4, flat_lo.size)), np.empty((4, flat_lo.size))
+        kernels.knee_bounds(flat_lo, flat_hi, self.constants, out_lo, out_hi)
+        c, s, x, y = (
+            Interval(out_lo[i].reshape(shape), out_hi[i].reshape(shape)) for i in range(4)
+        )
+        return [x, y], [-s, c], [-c, -s]
+
+    def _knee_boxes_intervals(self, angles: Interval) -> tuple[list[Interval], ...]:
+        """:meth:`knee_boxes` by :class:`Interval` operations (the reference)."""
         c, s = iv.cos(angles) * self.proximal, iv.sin(angles) * self.proximal
         return [c + self.base[0], s + self.base[1]], [-s, c], [-c, -s]
 
@@ -170,7 +267,55 @@ class RRLeg:
         ``alpha' = -g' / sin alpha`` and ``sin alpha`` falls to 0: its enclosure
         keeps the lower bound ``1 / max sin alpha`` of ``1 / sin alpha``. ``cache``
         (one per boxes and branch) keeps what does not depend on the velocity.
+
+        Compiled (:func:`._rr_kernels.fold_terms_prepare`, ``fold_terms_finish``
+        and ``fold_rate_bounds``): the results of :meth:`_fold_flow_intervals`,
+        bit for bit.
         """
+        boxes = pose_boxes(lo, hi)
+        if boxes is None or len(velocity) != 2:
+            return self._fold_flow_intervals(lo, hi, status, branch, velocity, cache)
+        n = boxes[0].shape[0]
+        parts = [flat_bounds(v, n) for v in velocity]
+        if parts[0] is None or parts[1] is None:
+            return self._fold_flow_intervals(lo, hi, status, branch, velocity, cache)
+        terms = None if cache is None else cache.get("fold_compiled")
+        if terms is None:
+            terms = self._fold_terms_compiled(*boxes)
+            if cache is not None:
+                cache["fold_compiled"] = terms
+        v_lo = np.stack([parts[0][0], parts[1][0]])
+        v_hi = np.stack([parts[0][1], parts[1][1]])
+        codes = np.ascontiguousarray(np.broadcast_to(status, (n,)), dtype=np.uint8)
+        keeps = np.empty(n, dtype=bool)
+        out_lo, out_hi = np.empty(n), np.empty(n)
+        sign = 1.0 if branch == 0 else -1.0
+        kernels.fold_rate_bounds(
+            terms[0], terms[1], v_lo, v_hi, codes, _CODES, sign, keeps, out_lo, out_hi
+        )
+        return keeps, Interval(out_lo, out_hi)
+
+    def _fold_terms_compiled(self, lo: Array, hi: Array) -> tuple[Array, Array]:
+        """The bounds of :meth:`_fold_terms` (but the sign), (5, n) each."""
+        n = lo.shape[0]
+        terms_lo, terms_hi, args = np.empty((5, n)), np.empty((5, n)), np.empty((2, n))
+        kernels.fold_terms_prepare(lo, hi, self.constants, terms_lo, terms_hi, args)
+        acos = np.empty((2, n))
+        np.arccos(args[0], out=acos[0])
+        np.arccos(args[1], out=acos[1])
+        kernels.fold_terms_finish(acos, terms_lo, terms_hi)
+        return terms_lo, terms_hi
+
+    def _fold_flow_intervals(
+        self,
+        lo: Array,
+        hi: Array,
+        status: NDArray[np.uint8],
+        branch: int,
+        velocity: list[Interval],
+        cache: dict[str, Any] | None = None,
+    ) -> tuple[NDArray[np.bool_], Interval]:
+        """:meth:`fold_flow` by :class:`Interval` operations (the reference)."""
         terms = None if cache is None else cache.get("fold")
         if terms is None:
             terms = self._fold_terms(lo, hi, branch)
@@ -226,7 +371,57 @@ class RRLeg:
 
     # ------------------------------------------------------------- boxes
     def reach(self, lo: Array, hi: Array) -> LegReach:
-        """Reachability and angle enclosures of the leg over boxes ``[lo, hi]`` (n, 2)."""
+        """Reachability and angle enclosures of the leg over boxes ``[lo, hi]`` (n, 2).
+
+        Compiled (:func:`._rr_kernels.reach_prepare` and ``reach_finish``, with
+        numpy's arctan2 and arccos between them): the results of
+        :meth:`_reach_intervals`, bit for bit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> leg = RRLeg((0.0, 0.0), 8.0, 5.0, "theta1")
+        >>> reach = leg.reach(np.array([[9.0, 2.0]]), np.array([[9.5, 2.5]]))
+        >>> int(reach.status[0]) == REGULAR
+        True
+        >>> t = leg.angles(np.array([[9.2, 2.3]]))[0]
+        >>> bool(reach.branches[0].contains(t[0])[0] and reach.branches[1].contains(t[1])[0])
+        True
+        """
+        boxes = pose_boxes(lo, hi)
+        if boxes is None:
+            return self._reach_intervals(lo, hi)
+        lo, hi = boxes
+        n = lo.shape[0]
+        # the direction of each box's centre, by numpy as _direction has it
+        base = np.asarray(self.base)
+        mid = 0.5 * (lo + hi) - base
+        theta_m = np.arctan2(mid[:, 1], mid[:, 0])
+        cs, sn = np.cos(theta_m), np.sin(theta_m)
+        ref = np.arctan2(sn, cs)
+        prep, status = np.empty((6, n)), np.empty(n, dtype=np.uint8)
+        kernels.reach_prepare(lo, hi, cs, sn, self.constants, _CODES, prep, status)
+        acos, corners = np.empty((2, n)), np.empty((4, n))
+        np.arccos(prep[0], out=acos[0])
+        np.arccos(prep[1], out=acos[1])
+        # the corners of (uy, ux): lo lo, lo hi, hi lo, hi hi
+        for i, (y, x) in enumerate(((4, 2), (4, 3), (5, 2), (5, 3))):
+            np.arctan2(prep[y], prep[x], out=corners[i])
+        out_lo, out_hi = np.empty((3, n)), np.empty((3, n))
+        fold_connected = np.empty(n, dtype=bool)
+        kernels.reach_finish(
+            lo, hi, status, _CODES, cs, sn, ref, corners, prep, acos, self.constants,
+            out_lo, out_hi, fold_connected,
+        )  # fmt: skip
+        return LegReach(
+            status=status,
+            branches=[Interval(out_lo[0], out_hi[0]), Interval(out_lo[1], out_hi[1])],
+            hull=Interval(out_lo[2], out_hi[2]),
+            fold_connected=fold_connected,
+        )
+
+    def _reach_intervals(self, lo: Array, hi: Array) -> LegReach:
+        """:meth:`reach` by :class:`Interval` operations (the reference)."""
         cx, cy = self.base
         a, b = self.proximal, self.distal
         n = lo.shape[0]
