@@ -38,12 +38,14 @@ __all__ = [
     "cos",
     "exp",
     "flat_arrays",
+    "holds_angle",
     "hull",
     "interval_add",
     "interval_mul",
     "interval_sub",
     "log",
     "may_contain_angle",
+    "move_below",
     "mul_into",
     "next_below",
     "point_sin_cos",
@@ -52,6 +54,7 @@ __all__ = [
     "sin",
     "sqrt",
     "square",
+    "step_down",
     "sub_into",
     "tan",
     "widen_down",
@@ -530,6 +533,14 @@ def _holds_angles(lo: Array, hi: Array, phase: Array) -> NDArray[np.bool_]:  # p
         out[i] = _holds_angle(lo[i], hi[i], phase[i])
     return out
 
+
+#: the rounding steps, public for the compiled code of the mechanisms (the same
+#: kernels, so the same floats as the Interval operations): ``x`` moved down by
+#: ``|x| * rel + tiny``, by one ulp (or a few) without jumps on the data, and
+#: whether an interval may contain an angle ``phase + 2 k pi``
+move_below = _below
+step_down = _down
+holds_angle = _holds_angle
 
 def may_contain_angle(x: Interval, phase: float | NDArray[np.float64]) -> NDArray[np.bool_]:
     """Whether each ``[lo, hi]`` may contain an angle ``phase + 2 k pi`` (conservative).

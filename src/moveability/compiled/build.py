@@ -101,6 +101,22 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         (R2, R2, R2, R1, R1, R1, W2, W2)
     ],
     "moveability.mechanisms._rpr_kernels.reach_bounds": [(R2, R2, R2, R1, W1, W1)],
+    "moveability.mechanisms._rr_kernels.knee_bounds": [(R1, R1, R1, W2, W2)],
+    "moveability.mechanisms._rr_kernels.det_a_bounds": [(R2, R2, R2, R2, R2, array(I8), W1, W1)],
+    "moveability.mechanisms._rr_kernels.reach_prepare": [
+        (R2, R2, R1, R1, R1, array("uint8"), W2, array("uint8", out=True))
+    ],
+    "moveability.mechanisms._rr_kernels.reach_finish": [
+        (
+            R2, R2, array("uint8"), array("uint8"), R1, R1, R1, R2, R2, R2, R1, W2, W2,
+            array(B1, out=True),
+        )
+    ],
+    "moveability.mechanisms._rr_kernels.fold_terms_prepare": [(R2, R2, R1, W2, W2, W2)],
+    "moveability.mechanisms._rr_kernels.fold_terms_finish": [(R2, W2, W2)],
+    "moveability.mechanisms._rr_kernels.fold_rate_bounds": [
+        (R2, R2, R2, R2, array("uint8"), array("uint8"), F8, array(B1, out=True), W1, W1)
+    ],
     "moveability.hypertree._bits.encode": [(array(I8, 2), array(I8, 2), array(I8))],
     "moveability.hypertree._bits.decode": [(array(U8), array(I8, 2), array(I8))],
     "moveability.hypertree._kernels._label": [

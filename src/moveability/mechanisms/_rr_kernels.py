@@ -9,11 +9,9 @@ operands in the same order, each rounded outwards by the compiled primitives
 of :mod:`moveability.intervals` that the Interval operators apply element by
 element (``mul_into``, ``add_into``, ``sub_into``, ``interval_mul``,
 ``interval_add``, ``interval_sub``; ``next_below`` in its inlined form
-``intervals._down``; the library functions' widening ``intervals._below`` with
+``step_down``; the library functions' widening ``move_below`` with
 ``_rel(4)``; and the steps of ``intervals._trig_bounds`` for a cosine or sine,
-:func:`_trig`). The private ones (``_below``, ``_down``, ``_holds_angle`` and
-their constants) are repeated below, the project importing no private name
-from another module. The bounds are thus the same floats, bit for bit
+:func:`_trig`). The bounds are thus the same floats, bit for bit
 (tests/mechanisms/test_five_bar_kernels.py compares them on random boxes of
 every kind). det A runs chunk by chunk, one vectorised pass per operation
 (see "passes" below), the others box by box, each quantity a pair of floats:
@@ -39,15 +37,18 @@ below).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
+from ..compiled import kernel
 from ..intervals import (
     add_into,
+    holds_angle,
     interval_add,
     interval_mul,
     interval_sub,
+    move_below,
     mul_into,
+    step_down,
     sub_into,
 )
 from ..types import Array
@@ -71,10 +72,8 @@ __all__ = [
 ) = range(23)  # fmt: skip
 
 # ------------------------------------------------------------------ rounding
-# The private rounding steps of moveability.intervals, repeated here (the project
-# imports no private name from another module): the same source, so the same
-# floats; the tests compare the kernels with the Interval code, which uses the
-# originals.
+# The rounding steps are those of moveability.intervals (move_below, step_down,
+# holds_angle): the same floats as the Interval code.
 
 _PI_UP = float(np.nextafter(np.pi, np.inf))
 _TWO_PI = 2.0 * np.pi
@@ -90,90 +89,53 @@ _LIB_REL = 5 * 2.0**-52
 _LIB_TINY = 4 * _TINY
 
 
-@njit(cache=True, nogil=True)
-def _below(x: float, rel: float, tiny: float, keep_zero: bool) -> float:  # pragma: no cover
-    """``intervals._below``: ``x`` moved down by ``|x| * rel + tiny``; a zero kept
-    when ``keep_zero``."""
-    if x != x or (keep_zero and x == 0.0):
-        return x
-    if x > _MAX:
-        # +inf: an overflow, the exact value is finite and above; one float below is
-        # the largest, more than one (tiny holds the number of ulps) are further
-        if tiny <= _TINY:
-            return _MAX
-        x = _MAX
-    if x < -_HUGE:
-        return -np.inf
-    return x - (abs(x) * rel + tiny)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _down(x: float, keep_zero: bool) -> float:  # pragma: no cover - compiled
-    """``intervals._down``: :func:`_below` by one ulp (or a few), inlined, without
-    jumps on the data (selects)."""
-    y = x - (abs(x) * _REL_1 + _TINY)
-    y = -np.inf if x < -_HUGE else y
-    y = _MAX if x > _MAX else y  # +inf: an overflow, the exact value is finite
-    return x if (x != x or (keep_zero and x == 0.0)) else y
-
-
-@njit(cache=True, nogil=True)
-def _holds_angle(lo: float, hi: float, phase: float) -> bool:  # pragma: no cover - compiled
-    """``intervals._holds_angle``: whether ``[lo, hi]`` may contain an angle ``phase
-    + 2 k pi`` (conservative)."""
-    # the quotient's rounding error grows with |x|: the margin is relative
-    tol = 1e-12 * max(1.0, max(abs(lo), abs(hi)))
-    k = np.ceil((lo - tol - phase) / _TWO_PI)
-    return phase + k * _TWO_PI <= hi + tol
-
-
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _next_below(x: float) -> float:  # pragma: no cover - compiled
-    """:func:`~moveability.intervals.next_below` (``_below`` by one ulp), as its
-    inlined form ``intervals._down`` computes it: without jumps on the data, so
+    """:func:`~moveability.intervals.next_below` (``move_below`` by one ulp), as its
+    inlined form ``intervals.step_down`` computes it: without jumps on the data, so
     that the loops around it vectorise."""
-    return _down(x, False)
+    return step_down(x, False)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _up(x: float) -> float:  # pragma: no cover - compiled
     """An upper bound moved up as :func:`_next_below` moves a lower bound down
-    (``intervals._above`` by one ulp: ``-_below(-x)``)."""
-    return -_down(-x, False)
+    (``intervals._above`` by one ulp: ``-move_below(-x)``)."""
+    return -step_down(-x, False)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _lib_down(x: float) -> float:  # pragma: no cover - compiled
     """``widen_down(x, _LIB_ULPS)``: a library function's lower bound."""
-    return _below(x, _LIB_REL, _LIB_TINY, False)
+    return move_below(x, _LIB_REL, _LIB_TINY, False)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _lib_up(x: float) -> float:  # pragma: no cover - compiled
     """``widen_up(x, _LIB_ULPS)``."""
-    return -_below(-x, _LIB_REL, _LIB_TINY, False)
+    return -move_below(-x, _LIB_REL, _LIB_TINY, False)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _max(a: float, b: float) -> float:  # pragma: no cover - compiled
     """``np.maximum`` of two floats: NaN if either is, else ``a`` when ``a >= b``."""
     return np.nan if ((a != a) | (b != b)) else (a if a >= b else b)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
     """``np.minimum`` of two floats: NaN if either is, else ``a`` when ``a <= b``."""
     return np.nan if ((a != a) | (b != b)) else (a if a <= b else b)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _reciprocal(x: float) -> float:  # pragma: no cover - compiled
     """``1.0 / x`` as numpy rounds it, an infinity of the zero's sign for a zero
     (compiled code would raise)."""
     return np.copysign(np.inf, x) if x == 0.0 else 1.0 / x
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _div(
     a_lo: float, a_hi: float, b_lo: float, b_hi: float
 ) -> tuple[float, float]:  # pragma: no cover - compiled
@@ -185,7 +147,7 @@ def _div(
     return interval_mul(a_lo, a_hi, i_lo, i_hi)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _square(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
     """``intervals.square``: ``x * x``, from 0 where ``x`` straddles 0."""
     s_lo, s_hi = interval_mul(lo, hi, lo, hi)
@@ -193,7 +155,7 @@ def _square(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - 
     return (0.0 if straddles else _max(s_lo, 0.0)), s_hi
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
     """``intervals.sqrt``: the square root of the non-negative part; NaN above
     where there is none."""
@@ -202,7 +164,7 @@ def _sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - co
     return _max(low, 0.0), high
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _trig_bound(
     fa: float, fb: float, a: float, b: float, sine: bool
 ) -> tuple[float, float]:  # pragma: no cover - compiled
@@ -217,20 +179,20 @@ def _trig_bound(
         low = min(fa, fb)
         high = max(fa, fb)
     wide = b - a >= _TWO_PI
-    if wide or _holds_angle(a, b, bottom):
+    if wide or holds_angle(a, b, bottom):
         low = -1.0
     else:
-        low = _below(low, _LIB_REL, _LIB_TINY, False)
-    if wide or _holds_angle(a, b, top):
+        low = move_below(low, _LIB_REL, _LIB_TINY, False)
+    if wide or holds_angle(a, b, top):
         high = 1.0
     else:
-        high = -_below(-high, _LIB_REL, _LIB_TINY, False)
+        high = -move_below(-high, _LIB_REL, _LIB_TINY, False)
     out_lo = low if low != low else max(low, -1.0)
     out_hi = high if high != high else min(high, 1.0)
     return out_lo, out_hi
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _cos_sin(a: float, b: float) -> tuple[float, float, float, float]:  # pragma: no cover
     """``intervals.cos`` and ``sin`` of ``[a, b]`` (:func:`_trig` of each), the
     four library values in one function: the compiler may merge the sine and
@@ -241,7 +203,7 @@ def _cos_sin(a: float, b: float) -> tuple[float, float, float, float]:  # pragma
     return c_lo, c_hi, s_lo, s_hi
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _trig(a: float, b: float, sine: bool) -> tuple[float, float]:  # pragma: no cover
     """``intervals.sin`` (or ``cos``) of ``[a, b]``: the steps of one element of
     ``intervals._trig_bounds``."""
@@ -250,7 +212,7 @@ def _trig(a: float, b: float, sine: bool) -> tuple[float, float]:  # pragma: no 
     return _trig_bound(fa, fb, a, b, sine)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def knee_bounds(
     a_lo: Array, a_hi: Array, leg: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -266,7 +228,7 @@ def knee_bounds(
     _knee_passes(out_lo, out_hi, np.int64(0), a, bx, by, n)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _knee_passes(
     lo: Array, hi: Array, c: Slot, a: float, bx: float, by: float, w: int
 ) -> None:  # pragma: no cover - compiled
@@ -280,7 +242,7 @@ def _knee_passes(
     _add_c(lo, hi, c + 1, by, by, c + 3, w)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _g(
     r_lo: float, r_hi: float, four_a2: float, shift_lo: float, shift_hi: float
 ) -> tuple[float, float]:  # pragma: no cover - compiled
@@ -307,25 +269,25 @@ Slot = int | np.int64
 _CHUNK = 256
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _mul(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = slot ``a`` * slot ``b`` (the first ``w`` boxes)."""
     mul_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _add(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = slot ``a`` + slot ``b``."""
     add_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _sub(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = slot ``a`` - slot ``b``."""
     sub_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _mul_c(
     lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
 ) -> None:  # pragma: no cover - compiled
@@ -335,7 +297,7 @@ def _mul_c(
         o_lo[j], o_hi[j] = interval_mul(a_lo[j], a_hi[j], c_lo, c_hi)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _add_c(
     lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
 ) -> None:  # pragma: no cover - compiled
@@ -345,7 +307,7 @@ def _add_c(
         o_lo[j], o_hi[j] = interval_add(a_lo[j], a_hi[j], c_lo, c_hi)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _sub_c(
     lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
 ) -> None:  # pragma: no cover - compiled
@@ -355,7 +317,7 @@ def _sub_c(
         o_lo[j], o_hi[j] = interval_sub(a_lo[j], a_hi[j], c_lo, c_hi)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _c_sub(
     lo: Array, hi: Array, c_lo: float, c_hi: float, a: Slot, o: Slot, w: int
 ) -> None:  # pragma: no cover - compiled
@@ -365,7 +327,7 @@ def _c_sub(
         o_lo[j], o_hi[j] = interval_sub(c_lo, c_hi, a_lo[j], a_hi[j])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _square_into(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = ``intervals.square`` of slot ``a``."""
     a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
@@ -373,7 +335,7 @@ def _square_into(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pra
         o_lo[j], o_hi[j] = _square(a_lo[j], a_hi[j])
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _div_into(
     lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int
 ) -> None:  # pragma: no cover - compiled
@@ -383,7 +345,7 @@ def _div_into(
         lo[o, j], hi[o, j] = o_lo_j, o_hi_j
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _branch_form(
     lo: Array,
     hi: Array,
@@ -457,7 +419,7 @@ _P, _TRIG, _ROWS, _NAT, _FORM, _TEMP = 0, 2, 10, 16, 17, 18
 _SLOTS = _TEMP + 17
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def det_a_bounds(
     lo: Array,
     hi: Array,
@@ -533,7 +495,7 @@ def det_a_bounds(
 
 
 # ------------------------------------------------------------------ reach
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _near_far(
     lo: float, hi: float, base: float
 ) -> tuple[float, float]:  # pragma: no cover - compiled
@@ -544,7 +506,7 @@ def _near_far(
     return near, far
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _sqrt_into(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = ``intervals.sqrt`` of slot ``a``."""
     a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
@@ -561,7 +523,7 @@ _LA, _LB, _LR, _LTWO_A, _LK, _LMORE = 12, 13, 14, 15, 16, 17
 _LSLOTS = _LMORE + 4
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _distance_g(
     lo: Array, hi: Array, point: Slot, rho2: Slot, g: Slot, bx: float, by: float, w: int
 ) -> None:  # pragma: no cover - compiled
@@ -579,7 +541,7 @@ def _distance_g(
     _add(lo, hi, a, b, g, w)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _leg_chunk(
     box_lo: Array, box_hi: Array, s: int, w: int, leg: Array, lo: Array, hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -611,7 +573,7 @@ def _leg_chunk(
     _sub_c(lo, hi, np.int64(_LP + 1), by, by, np.int64(_LDY), w)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def _arccos_args(
     lo: Array, hi: Array, j: int, leg: Array
 ) -> tuple[float, float]:  # pragma: no cover - compiled
@@ -630,13 +592,13 @@ def _arccos_args(
     return _min(_max(g_hi, -1.0), 1.0), _min(_max(g_lo, -1.0), 1.0)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _alpha(acos_lo: float, acos_hi: float) -> tuple[float, float]:  # pragma: no cover
     """``intervals.arccos`` from the arccos of its two arguments."""
     return _max(_lib_down(acos_lo), 0.0), _min(_lib_up(acos_hi), _PI_UP)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def reach_prepare(
     lo: Array,
     hi: Array,
@@ -703,7 +665,7 @@ _TWO_PI_LO = float(np.nextafter(2 * np.pi, 0.0))
 _TWO_PI_HI = float(np.nextafter(2 * np.pi, np.inf))
 
 
-@njit(cache=True, nogil=True, inline="always")
+@kernel(inline=True)
 def _atan_bounds(
     lo: float, hi: float, cut: bool
 ) -> tuple[float, float]:  # pragma: no cover - compiled
@@ -714,7 +676,7 @@ def _atan_bounds(
     return _max(low, -_PI_UP), _min(high, _PI_UP)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def reach_finish(
     lo: Array,
     hi: Array,
@@ -775,7 +737,7 @@ def reach_finish(
 DX, DY, RHO, RHO2, SCALE = range(5)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def fold_terms_prepare(
     lo: Array, hi: Array, leg: Array, terms_lo: Array, terms_hi: Array, args: Array
 ) -> None:  # pragma: no cover - compiled
@@ -811,7 +773,7 @@ def fold_terms_prepare(
             args[0, s + j], args[1, s + j] = _arccos_args(s_lo, s_hi, j, leg)
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def fold_terms_finish(
     acos: Array, terms_lo: Array, terms_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -828,7 +790,7 @@ def fold_terms_finish(
         )
 
 
-@njit(cache=True, nogil=True)
+@kernel
 def fold_rate_bounds(
     terms_lo: Array,
     terms_hi: Array,
