@@ -31,6 +31,7 @@ from .types import Array
 
 __all__ = [
     "Interval",
+    "Slot",
     "absolute",
     "add_into",
     "arccos",
@@ -52,6 +53,9 @@ __all__ = [
     "power",
     "rational",
     "sin",
+    "slot_add",
+    "slot_mul",
+    "slot_sub",
     "sqrt",
     "square",
     "step_down",
@@ -307,6 +311,33 @@ def sub_into(
     """:func:`interval_sub` of flat arrays, into ``out`` (see :func:`mul_into`)."""
     for i in range(out_lo.size):
         out_lo[i], out_hi[i] = interval_sub(a_lo[i], a_hi[i], b_lo[i], b_hi[i])
+
+
+# The mechanisms' compiled enclosures work chunk by chunk: each quantity of a
+# chunk's boxes is a row (a "slot") of two scratch arrays ``lo``, ``hi`` (slots x
+# boxes), and each interval operation one loop over the chunk's boxes.
+
+#: a slot (a row of the scratch); kernels pass them as np.int64: a constant would
+#: have numba compile each pass once for each slot number
+Slot = int | np.int64
+
+
+@kernel
+def slot_mul(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` * slot ``b`` (the first ``w`` boxes), by :func:`mul_into`."""
+    mul_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
+
+
+@kernel
+def slot_add(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` + slot ``b``, by :func:`add_into`."""
+    add_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
+
+
+@kernel
+def slot_sub(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` - slot ``b``, by :func:`sub_into`."""
+    sub_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
 
 
 @kernel

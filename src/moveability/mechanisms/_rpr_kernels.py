@@ -27,21 +27,19 @@ from numpy.typing import NDArray
 
 from ..compiled import kernel
 from ..intervals import (
-    add_into,
+    Slot,
     interval_mul,
     interval_sub,
-    mul_into,
     next_below,
     point_sin_cos,
-    sub_into,
+    slot_add,
+    slot_mul,
+    slot_sub,
 )
 from ..types import Array
 
 __all__ = ["det_a_bounds", "joint_gradient_bounds", "reach_bounds", "row_bounds"]
 
-#: a slot (a row of the scratch, see below); the kernels pass them as np.int64: a
-#: constant would have numba compile each helper once for each slot number
-Slot = int | np.int64
 
 #: the entries of one leg in :func:`row_bounds`: the row (dx, dy, turn), then
 #: the partials that are not constants (-rby, rbx, -(rbx px + rby py))
@@ -75,24 +73,6 @@ def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
 
 #: boxes per chunk: the scratch (about 50 slots, 2 x 8 bytes a box each) stays in cache
 _CHUNK = 256
-
-
-@kernel
-def _mul(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = slot ``a`` * slot ``b`` (the first ``w`` boxes)."""
-    mul_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
-
-
-@kernel
-def _add(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = slot ``a`` + slot ``b``."""
-    add_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
-
-
-@kernel
-def _sub(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = slot ``a`` - slot ``b``."""
-    sub_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
 
 
 @kernel
@@ -171,31 +151,31 @@ def _leg(
     # R(phi) b: rbx = c bx - s by, rby = s bx + c by
     _scale(lo, hi, c, bx, p, w)
     _scale(lo, hi, c + 1, by, q, w)
-    _sub(lo, hi, p, q, rbx, w)
+    slot_sub(lo, hi, p, q, rbx, w)
     _scale(lo, hi, c + 1, bx, p, w)
     _scale(lo, hi, c, by, q, w)
-    _add(lo, hi, p, q, rby, w)
+    slot_add(lo, hi, p, q, rby, w)
     # d = (P + R b) - A
-    _add(lo, hi, x, rbx, row, w)
+    slot_add(lo, hi, x, rbx, row, w)
     _shift(lo, hi, row, ax, row, w)
-    _add(lo, hi, x + 1, rby, row + 1, w)
+    slot_add(lo, hi, x + 1, rby, row + 1, w)
     _shift(lo, hi, row + 1, ay, row + 1, w)
     if partials == _TARGET:
         return
     # the turn (R b) x (P - A)
     _shift(lo, hi, x, ax, px, w)
     _shift(lo, hi, x + 1, ay, py, w)
-    _mul(lo, hi, rbx, py, p, w)
-    _mul(lo, hi, rby, px, q, w)
-    _sub(lo, hi, p, q, row + 2, w)
+    slot_mul(lo, hi, rbx, py, p, w)
+    slot_mul(lo, hi, rby, px, q, w)
+    slot_sub(lo, hi, p, q, row + 2, w)
     if partials < 0:
         return
     _negate(lo, hi, rby, partials, w)
     lo[partials + 1, :w] = lo[rbx, :w]
     hi[partials + 1, :w] = hi[rbx, :w]
-    _mul(lo, hi, rbx, px, p, w)
-    _mul(lo, hi, rby, py, q, w)
-    _add(lo, hi, p, q, partials + 2, w)
+    slot_mul(lo, hi, rbx, px, p, w)
+    slot_mul(lo, hi, rby, py, q, w)
+    slot_add(lo, hi, p, q, partials + 2, w)
     _negate(lo, hi, partials + 2, partials + 2, w)
 
 
@@ -208,22 +188,22 @@ def _det3(
     alternately subtracted and added. Slots ``t``, ``t + 1`` are scratch."""
     p, q = t, t + 1
     # j = 0: a00 (a11 a22 - a12 a21)
-    _mul(lo, hi, m[4], m[8], p, w)
-    _mul(lo, hi, m[5], m[7], q, w)
-    _sub(lo, hi, p, q, p, w)
-    _mul(lo, hi, m[0], p, o, w)
+    slot_mul(lo, hi, m[4], m[8], p, w)
+    slot_mul(lo, hi, m[5], m[7], q, w)
+    slot_sub(lo, hi, p, q, p, w)
+    slot_mul(lo, hi, m[0], p, o, w)
     # j = 1: - a01 (a10 a22 - a12 a20)
-    _mul(lo, hi, m[3], m[8], p, w)
-    _mul(lo, hi, m[5], m[6], q, w)
-    _sub(lo, hi, p, q, p, w)
-    _mul(lo, hi, m[1], p, q, w)
-    _sub(lo, hi, o, q, o, w)
+    slot_mul(lo, hi, m[3], m[8], p, w)
+    slot_mul(lo, hi, m[5], m[6], q, w)
+    slot_sub(lo, hi, p, q, p, w)
+    slot_mul(lo, hi, m[1], p, q, w)
+    slot_sub(lo, hi, o, q, o, w)
     # j = 2: + a02 (a10 a21 - a11 a20)
-    _mul(lo, hi, m[3], m[7], p, w)
-    _mul(lo, hi, m[4], m[6], q, w)
-    _sub(lo, hi, p, q, p, w)
-    _mul(lo, hi, m[2], p, q, w)
-    _add(lo, hi, o, q, o, w)
+    slot_mul(lo, hi, m[3], m[7], p, w)
+    slot_mul(lo, hi, m[4], m[6], q, w)
+    slot_sub(lo, hi, p, q, p, w)
+    slot_mul(lo, hi, m[2], p, q, w)
+    slot_add(lo, hi, o, q, o, w)
 
 
 # the slots of det_a_bounds
@@ -291,11 +271,11 @@ def det_a_bounds(
                     _det3(s_lo, s_hi, matrix, total, temp, size)
                 else:
                     _det3(s_lo, s_hi, matrix, term, temp, size)
-                    _add(s_lo, s_hi, total, term, total, size)
+                    slot_add(s_lo, s_hi, total, term, total, size)
             # + dD/dx_j * (x_j - c_j)
-            _sub(s_lo, s_hi, x + axis, mx + axis, width, size)
-            _mul(s_lo, s_hi, total, width, term, size)
-            _add(s_lo, s_hi, tot, term, tot, size)
+            slot_sub(s_lo, s_hi, x + axis, mx + axis, width, size)
+            slot_mul(s_lo, s_hi, total, width, term, size)
+            slot_add(s_lo, s_hi, tot, term, tot, size)
         for j in range(size):
             out_lo[s + j] = _max(s_lo[nat, j], s_lo[tot, j])
             out_hi[s + j] = _min(s_hi[nat, j], s_hi[tot, j])
@@ -364,7 +344,7 @@ def joint_gradient_bounds(
             s_lo[inv, j] = -np.inf if straddles else i_lo
             s_hi[inv, j] = np.inf if straddles else i_hi
         for e in range(3):
-            _mul(s_lo, s_hi, row + e, inv, row + e, size)
+            slot_mul(s_lo, s_hi, row + e, inv, row + e, size)
         out_lo[:, s : s + size] = s_lo[row : row + 3, :size]
         out_hi[:, s : s + size] = s_hi[row : row + 3, :size]
 
@@ -387,11 +367,11 @@ def reach_bounds(
         _leg(s_lo, s_hi, x, c, leg, row, np.int64(_TARGET), temp, size)
         # squares: x * x, from 0 where x straddles 0
         for e in range(2):
-            _mul(s_lo, s_hi, row + e, row + e, sq + e, size)
+            slot_mul(s_lo, s_hi, row + e, row + e, sq + e, size)
             for j in range(size):
                 straddles = s_lo[row + e, j] <= 0 and s_hi[row + e, j] >= 0
                 s_lo[sq + e, j] = 0.0 if straddles else _max(s_lo[sq + e, j], 0.0)
-        _add(s_lo, s_hi, sq, sq + 1, sq, size)
+        slot_add(s_lo, s_hi, sq, sq + 1, sq, size)
         for j in range(size):
             # the square root of the non-negative part; NaN above where there is none
             r_lo, r_hi = s_lo[sq, j], s_hi[sq, j]

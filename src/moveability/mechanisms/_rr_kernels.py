@@ -41,15 +41,16 @@ from numpy.typing import NDArray
 
 from ..compiled import kernel
 from ..intervals import (
-    add_into,
+    Slot,
     holds_angle,
     interval_add,
     interval_mul,
     interval_sub,
     move_below,
-    mul_into,
+    slot_add,
+    slot_mul,
+    slot_sub,
     step_down,
-    sub_into,
 )
 from ..types import Array
 
@@ -262,29 +263,8 @@ def _g(
 # on the data): several times faster than one box at a time. Slots are passed as
 # np.int64 (a constant would have numba compile each pass once per slot number).
 
-#: a slot (a row of the scratch)
-Slot = int | np.int64
-
 #: boxes per chunk: the scratch (about 40 slots, 2 x 8 bytes a box each) stays in cache
 _CHUNK = 256
-
-
-@kernel
-def _mul(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = slot ``a`` * slot ``b`` (the first ``w`` boxes)."""
-    mul_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
-
-
-@kernel
-def _add(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = slot ``a`` + slot ``b``."""
-    add_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
-
-
-@kernel
-def _sub(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = slot ``a`` - slot ``b``."""
-    sub_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
 
 
 @kernel
@@ -370,7 +350,7 @@ def _branch_form(
     _sub_c(lo, hi, px + 1, leg[BASE_Y], leg[BASE_Y], y, w)
     _square_into(lo, hi, x, sx, w)
     _square_into(lo, hi, y, sy, w)
-    _add(lo, hi, sx, sy, rho, w)
+    slot_add(lo, hi, sx, sy, rho, w)
     # 1 - c = 0.5 - shift / (2 rho)
     _mul_c(lo, hi, rho, 2.0, 2.0, r2, w)
     lo[shift, :w] = leg[SHIFT_LO]
@@ -389,7 +369,7 @@ def _branch_form(
         _mul_c(lo, hi, wx, four_a2, four_a2, wy, w)
         _add_c(lo, hi, wx, shift_lo, shift_hi, dot, w)
         _square_into(lo, hi, dot, dot, w)
-        _sub(lo, hi, wy, dot, e, w)
+        slot_sub(lo, hi, wy, dot, e, w)
     for j in range(w):
         ends_lo, ends_hi = _min(lo[u, j], lo[v, j]), _max(hi[u, j], hi[v, j])
         inside = (lo[rho, j] <= top) & (hi[rho, j] >= top)
@@ -398,19 +378,19 @@ def _branch_form(
     # (Q - O) x (P - O) and (P - O) . (P - Q)
     _sub_c(lo, hi, q, leg[BASE_X], leg[BASE_X], ox, w)
     _sub_c(lo, hi, q + 1, leg[BASE_Y], leg[BASE_Y], oy, w)
-    _mul(lo, hi, ox, y, u, w)
-    _mul(lo, hi, oy, x, v, w)
-    _sub(lo, hi, u, v, cross, w)
-    _sub(lo, hi, px, q, wx, w)
-    _sub(lo, hi, px + 1, q + 1, wy, w)
-    _mul(lo, hi, x, wx, u, w)
-    _mul(lo, hi, y, wy, v, w)
-    _add(lo, hi, u, v, dot, w)
+    slot_mul(lo, hi, ox, y, u, w)
+    slot_mul(lo, hi, oy, x, v, w)
+    slot_sub(lo, hi, u, v, cross, w)
+    slot_sub(lo, hi, px, q, wx, w)
+    slot_sub(lo, hi, px + 1, q + 1, wy, w)
+    slot_mul(lo, hi, x, wx, u, w)
+    slot_mul(lo, hi, y, wy, v, w)
+    slot_add(lo, hi, u, v, dot, w)
     # (1 - c) cross + (k dot) side
-    _mul(lo, hi, omc, cross, u, w)
-    _mul(lo, hi, k, dot, v, w)
+    slot_mul(lo, hi, omc, cross, u, w)
+    slot_mul(lo, hi, k, dot, v, w)
     _mul_c(lo, hi, v, side, side, v, w)
-    _add(lo, hi, u, v, o, w)
+    slot_add(lo, hi, u, v, o, w)
 
 
 # the slots of det_a_bounds: the box; the legs' cos, sin and elbows (leg k's
@@ -467,13 +447,13 @@ def det_a_bounds(
         _knee_passes(s_lo, s_hi, trig, a0, bx0, by0, size)
         _knee_passes(s_lo, s_hi, trig + 4, a1, bx1, by1, size)
         # the rows P - C, P - D and their determinant
-        _sub(s_lo, s_hi, p, elbows[0], rows, size)
-        _sub(s_lo, s_hi, p + 1, elbows[0] + 1, rows + 1, size)
-        _sub(s_lo, s_hi, p, elbows[1], rows + 2, size)
-        _sub(s_lo, s_hi, p + 1, elbows[1] + 1, rows + 3, size)
-        _mul(s_lo, s_hi, rows, rows + 3, rows + 4, size)
-        _mul(s_lo, s_hi, rows + 1, rows + 2, rows + 5, size)
-        _sub(s_lo, s_hi, rows + 4, rows + 5, nat, size)
+        slot_sub(s_lo, s_hi, p, elbows[0], rows, size)
+        slot_sub(s_lo, s_hi, p + 1, elbows[0] + 1, rows + 1, size)
+        slot_sub(s_lo, s_hi, p, elbows[1], rows + 2, size)
+        slot_sub(s_lo, s_hi, p + 1, elbows[1] + 1, rows + 3, size)
+        slot_mul(s_lo, s_hi, rows, rows + 3, rows + 4, size)
+        slot_mul(s_lo, s_hi, rows + 1, rows + 2, rows + 5, size)
+        slot_sub(s_lo, s_hi, rows + 4, rows + 5, nat, size)
         if branches[0] >= 0:
             for leg in range(2):
                 side = 1.0 if branches[leg] == 0 else -1.0
@@ -534,11 +514,11 @@ def _distance_g(
     _square_into(lo, hi, a, a, w)
     _sub_c(lo, hi, point + 1, by, by, b, w)
     _square_into(lo, hi, b, b, w)
-    _add(lo, hi, a, b, rho2, w)
+    slot_add(lo, hi, a, b, rho2, w)
     _sqrt_into(lo, hi, rho2, r, w)
     _div_into(lo, hi, r, np.int64(_LTWO_A), a, w)
     _div_into(lo, hi, np.int64(_LK), r, b, w)
-    _add(lo, hi, a, b, g, w)
+    slot_add(lo, hi, a, b, g, w)
 
 
 @kernel
@@ -648,12 +628,12 @@ def reach_prepare(
             s_lo[cs_at, j], s_hi[cs_at, j] = cs[s + j], cs[s + j]
             s_lo[sn_at, j], s_hi[sn_at, j] = sn[s + j], sn[s + j]
         # the box about the base, turned by the direction of its centre
-        _mul(s_lo, s_hi, np.int64(_LDX), np.int64(cs_at), a, size)
-        _mul(s_lo, s_hi, np.int64(_LDY), np.int64(sn_at), b, size)
-        _add(s_lo, s_hi, a, b, np.int64(ux), size)
-        _mul(s_lo, s_hi, np.int64(_LDY), np.int64(cs_at), a, size)
-        _mul(s_lo, s_hi, np.int64(_LDX), np.int64(sn_at), b, size)
-        _sub(s_lo, s_hi, a, b, np.int64(uy), size)
+        slot_mul(s_lo, s_hi, np.int64(_LDX), np.int64(cs_at), a, size)
+        slot_mul(s_lo, s_hi, np.int64(_LDY), np.int64(sn_at), b, size)
+        slot_add(s_lo, s_hi, a, b, np.int64(ux), size)
+        slot_mul(s_lo, s_hi, np.int64(_LDY), np.int64(cs_at), a, size)
+        slot_mul(s_lo, s_hi, np.int64(_LDX), np.int64(sn_at), b, size)
+        slot_sub(s_lo, s_hi, a, b, np.int64(uy), size)
         out[2, s : s + size] = s_lo[ux, :size]
         out[3, s : s + size] = s_hi[ux, :size]
         out[4, s : s + size] = s_lo[uy, :size]
@@ -755,7 +735,7 @@ def fold_terms_prepare(
         _leg_chunk(lo, hi, s, size, leg, s_lo, s_hi)
         _square_into(s_lo, s_hi, np.int64(_LDX), a, size)
         _square_into(s_lo, s_hi, np.int64(_LDY), b, size)
-        _add(s_lo, s_hi, a, b, rho2, size)
+        slot_add(s_lo, s_hi, a, b, rho2, size)
         _sqrt_into(s_lo, s_hi, rho2, rho, size)
         _div_into(s_lo, s_hi, np.int64(_LK), rho2, q, size)
         _c_sub(s_lo, s_hi, leg[SLOPE_LO], leg[SLOPE_HI], q, slope, size)
