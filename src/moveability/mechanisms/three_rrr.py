@@ -27,7 +27,7 @@ the left: the sides :attr:`Linkage.ends` declares.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -37,8 +37,9 @@ from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
 from ..types import Array
+from . import tape as tp
 from .base import Mechanism, three_points
-from .constraint_leg import ConstraintLeg
+from .constraint_leg import ConstraintLeg, Function
 from .constraints import Linkage, fixed_point
 from .expressions import cos, sin
 from .platform import platform_points, platform_sides, platform_velocities
@@ -49,47 +50,89 @@ _JOINTS = ("theta1", "theta2", "theta3")
 _THREE = ("1", "2", "3")
 
 
+class _Taped:
+    """A leg function evaluated as written (floats or Intervals), with
+    :attr:`tape`: the same function traced once (:mod:`moveability.mechanisms.tape`),
+    which :class:`ConstraintLeg` runs over many boxes in one compiled loop with the
+    bounds of the interpreted path."""
+
+    def __init__(self, make: Callable[[Any, Any], Function]) -> None:
+        self._plain = make(cos, sin)
+        self._traceable = make(_TRACED_COS, _TRACED_SIN)
+        self._tape: tp.Tape | None = None
+        self.__doc__ = self._plain.__doc__
+
+    def __call__(self, *args: Any) -> Any:
+        return self._plain(*args)
+
+    @property
+    def tape(self) -> tp.Tape:
+        """The traced tape (built on first use)."""
+        if self._tape is None:
+            self._tape = tp.trace(self._traceable, 3)
+        return self._tape
+
+
+_TRACED_COS, _TRACED_SIN = tp.traced(cos, "cos"), tp.traced(sin, "sin")
+
+
 def _leg(
     joint: str, a: tuple[float, float], b: tuple[float, float], l1: float, l2: float
 ) -> ConstraintLeg:
     ax, ay = a
     bx, by = b
 
-    def target(x: Any, y: Any, phi: Any) -> tuple[Any, Any]:
-        """``B_i - A_i``."""
-        c, s = cos(phi), sin(phi)
-        return x + c * bx - s * by - ax, y + s * bx + c * by - ay
+    def functions(cos: Any, sin: Any) -> dict[str, Function]:
+        """The leg's constraint and its derivatives, on the given sine and cosine."""
 
-    def f(x: Any, y: Any, phi: Any, q: Any) -> Any:
-        u, v = target(x, y, phi)
-        return (u - l1 * cos(q)) ** 2 + (v - l1 * sin(q)) ** 2 - l2 * l2
+        def target(x: Any, y: Any, phi: Any) -> tuple[Any, Any]:
+            """``B_i - A_i``."""
+            c, s = cos(phi), sin(phi)
+            return x + c * bx - s * by - ax, y + s * bx + c * by - ay
 
-    def df_dq(x: Any, y: Any, phi: Any, q: Any) -> Any:
-        u, v = target(x, y, phi)
-        return 2 * l1 * (u * sin(q) - v * cos(q))
+        def f(x: Any, y: Any, phi: Any, q: Any) -> Any:
+            u, v = target(x, y, phi)
+            return (u - l1 * cos(q)) ** 2 + (v - l1 * sin(q)) ** 2 - l2 * l2
 
-    def d2f_dq2(x: Any, y: Any, phi: Any, q: Any) -> Any:
-        u, v = target(x, y, phi)
-        return 2 * l1 * (u * cos(q) + v * sin(q))
+        def df_dq(x: Any, y: Any, phi: Any, q: Any) -> Any:
+            u, v = target(x, y, phi)
+            return 2 * l1 * (u * sin(q) - v * cos(q))
 
-    def df_dx(x: Any, y: Any, phi: Any, q: Any) -> Any:
-        u, _ = target(x, y, phi)
-        return 2 * (u - l1 * cos(q))
+        def d2f_dq2(x: Any, y: Any, phi: Any, q: Any) -> Any:
+            u, v = target(x, y, phi)
+            return 2 * l1 * (u * cos(q) + v * sin(q))
 
-    def df_dy(x: Any, y: Any, phi: Any, q: Any) -> Any:
-        _, v = target(x, y, phi)
-        return 2 * (v - l1 * sin(q))
+        def df_dx(x: Any, y: Any, phi: Any, q: Any) -> Any:
+            u, _ = target(x, y, phi)
+            return 2 * (u - l1 * cos(q))
 
-    def df_dphi(x: Any, y: Any, phi: Any, q: Any) -> Any:
-        u, v = target(x, y, phi)
-        c, s = cos(phi), sin(phi)
-        du = -(s * bx) - c * by
-        dv = c * bx - s * by
-        return 2 * ((u - l1 * cos(q)) * du + (v - l1 * sin(q)) * dv)
+        def df_dy(x: Any, y: Any, phi: Any, q: Any) -> Any:
+            _, v = target(x, y, phi)
+            return 2 * (v - l1 * sin(q))
+
+        def df_dphi(x: Any, y: Any, phi: Any, q: Any) -> Any:
+            u, v = target(x, y, phi)
+            c, s = cos(phi), sin(phi)
+            du = -(s * bx) - c * by
+            dv = c * bx - s * by
+            return 2 * ((u - l1 * cos(q)) * du + (v - l1 * sin(q)) * dv)
+
+        return {
+            "f": f,
+            "df_dq": df_dq,
+            "d2f_dq2": d2f_dq2,
+            "df_dx": df_dx,
+            "df_dy": df_dy,
+            "df_dphi": df_dphi,
+        }
+
+    def taped(name: str) -> _Taped:
+        return _Taped(lambda cos, sin: functions(cos, sin)[name])
 
     def closed_form(points: Array) -> Array:
         """``theta +- alpha`` (as in the RR leg)."""
-        u, v = target(points[:, 0], points[:, 1], points[:, 2])
+        u = points[:, 0] + np.cos(points[:, 2]) * bx - np.sin(points[:, 2]) * by - ax
+        v = points[:, 1] + np.sin(points[:, 2]) * bx + np.cos(points[:, 2]) * by - ay
         rho = np.hypot(u, v)
         with np.errstate(divide="ignore", invalid="ignore"):
             g = (rho**2 + l1 * l1 - l2 * l2) / (2 * l1 * rho)
@@ -99,10 +142,10 @@ def _leg(
 
     return ConstraintLeg(
         joint,
-        f=f,
-        df_dq=df_dq,
-        d2f_dq2=d2f_dq2,
-        df_dx=(df_dx, df_dy, df_dphi),
+        f=taped("f"),
+        df_dq=taped("df_dq"),
+        d2f_dq2=taped("d2f_dq2"),
+        df_dx=(taped("df_dx"), taped("df_dy"), taped("df_dphi")),
         closed_form=closed_form,
     )
 
