@@ -24,8 +24,10 @@ comparisons printed, each with its target (printed, never asserted):
    (``scipy.ndimage.label``, then a union-find across the faces phi = -pi, pi).
    Target: regions / numpy <= 0.5. ``--no-resolve`` (the plain pass) is timed
    too.
-3. ``analyze`` of the user-defined five-bar (examples/five-bar-custom.toml)
-   against the built-in one, both at precision 0.05. Target: <= 3.
+3. ``analyze`` of the user-defined five-bar (examples/five-bar-custom.toml,
+   its [bounds] set to the box the built-in's analysis subdivides, so that
+   both split the same cells) against the built-in one, both at precision
+   0.05. Target: <= 3.
 4. ``moveability --version`` against ``python -c "import numpy"``, best of 5.
    Target: <= 3.
 5. Scaling: leaves and seconds of ``analyze`` for the built-in five-bar at
@@ -69,11 +71,12 @@ KERNEL_MODE = "import moveability.compiled as c; print(c.MODE, '-', c.REASON)"
 
 
 # ------------------------------------------------------------- numpy grids
-def five_bar_grid(params: dict[str, Any], h: float) -> dict[str, Any]:
+def five_bar_grid(params: dict[str, Any], h: float | Sequence[float]) -> dict[str, Any]:
     """Regions of a five-bar on a grid of poses of spacing ``h`` (uncertified).
 
     ``params`` (see :func:`mechanism_params`): lengths, joint limits and the
-    analysis' box of poses; numpy and scipy alone do the work.
+    analysis' box of poses; ``h`` one spacing or one per pose axis (the joint
+    grid takes the smallest, in radians); numpy and scipy alone do the work.
     """
     import numpy as np
     from scipy import ndimage
@@ -84,9 +87,11 @@ def five_bar_grid(params: dict[str, Any], h: float) -> dict[str, Any]:
     if not np.isfinite(limits).all():
         raise ValueError("the joint-space grid needs finite joint limits")
     lo, hi = np.array(params["lo"]), np.array(params["hi"])
-    n = np.ceil((hi - lo) / h).astype(int)
-    x = lo[0] + (np.arange(n[0]) + 0.5) * h
-    y = lo[1] + (np.arange(n[1]) + 0.5) * h
+    hx, hy = np.broadcast_to(np.asarray(h, dtype=np.float64), (2,))
+    hq = min(hx, hy)
+    n = np.ceil((hi - lo) / (hx, hy)).astype(int)
+    x = lo[0] + (np.arange(n[0]) + 0.5) * hx
+    y = lo[1] + (np.arange(n[1]) + 0.5) * hy
     px, py = (v.ravel() for v in np.meshgrid(x, y, indexing="ij"))
 
     def inverse(bx: float, a: float, b: float) -> list[Any]:
@@ -116,7 +121,7 @@ def five_bar_grid(params: dict[str, Any], h: float) -> dict[str, Any]:
 
     # the joint space: direct kinematics on a grid over (theta1, theta2), the two
     # assembly modes P = M +- k n (n normal to CD), each with its sign of det A
-    nodes = [np.arange(int(np.floor((b - a) / h)) + 1) * h + a for a, b in limits]
+    nodes = [np.arange(int(np.floor((b - a) / hq)) + 1) * hq + a for a, b in limits]
     q1, q2 = np.meshgrid(*nodes, indexing="ij")
     cx, cy = L1 * np.cos(q1), L1 * np.sin(q1)
     dx, dy = L0 + L3 * np.cos(q2), L3 * np.sin(q2)
@@ -139,8 +144,8 @@ def five_bar_grid(params: dict[str, Any], h: float) -> dict[str, Any]:
     offsets = np.cumsum([0] + [int(lab.max()) for lab in labels])
     hits = []
     for t1, t2, ok, sign in postures:
-        i1 = np.rint(np.mod(t1[ok] - limits[0][0], 2 * np.pi) / h).astype(int)
-        i2 = np.rint(np.mod(t2[ok] - limits[1][0], 2 * np.pi) / h).astype(int)
+        i1 = np.rint(np.mod(t1[ok] - limits[0][0], 2 * np.pi) / hq).astype(int)
+        i2 = np.rint(np.mod(t2[ok] - limits[1][0], 2 * np.pi) / hq).astype(int)
         i1 = np.minimum(i1, len(nodes[0]) - 1)
         i2 = np.minimum(i2, len(nodes[1]) - 1)
         for j, s in enumerate((1.0, -1.0)):
@@ -149,7 +154,7 @@ def five_bar_grid(params: dict[str, Any], h: float) -> dict[str, Any]:
             keep = lab > 0
             hits.append((offsets[j] + lab[keep] - 1) * px.size + np.flatnonzero(ok)[mine][keep])
     pairs = np.unique(np.concatenate(hits))
-    areas = np.bincount(pairs // px.size, minlength=offsets[-1]) * h * h
+    areas = np.bincount(pairs // px.size, minlength=offsets[-1]) * hx * hy
     seconds = time.perf_counter() - start
     regions = sorted(
         ({"sign": s, "area": float(a)} for s, a in zip(comp_sign, areas, strict=True) if a > 0),
@@ -158,8 +163,8 @@ def five_bar_grid(params: dict[str, Any], h: float) -> dict[str, Any]:
     return {
         "seconds": seconds,
         "grid": f"{n[0]}x{n[1]} poses, {q1.shape[0]}x{q1.shape[1]} joints",
-        "cell": h * h,
-        "workspace": float(in_w.sum() * h * h),
+        "cell": float(hx * hy),
+        "workspace": float(in_w.sum() * hx * hy),
         "regions": regions,
     }
 
@@ -267,6 +272,16 @@ def mechanism_params(spec_file: str) -> dict[str, Any]:
     return out
 
 
+def analysed_box(spec_file: str) -> dict[str, Any]:
+    """The box the analysis of a spec subdivides (at any precision)."""
+    from moveability import load_spec
+    from moveability.mechanisms import from_spec
+
+    mechanism: Any = from_spec(load_spec(spec_file))
+    lo, hi = mechanism.pose_box()
+    return {"lo": [float(v) for v in lo], "hi": [float(v) for v in hi]}
+
+
 def span_precision(params: dict[str, Any], parts: int) -> list[float]:
     """1/parts of the span of each axis of the box of poses."""
     return [(b - a) / parts for a, b in zip(params["lo"], params["hi"], strict=True)]
@@ -277,13 +292,15 @@ def child(kind: str, args: list[Any]) -> None:
     import resource
 
     if kind == "five-bar-grid":
-        out = five_bar_grid(args[0], float(args[1]))
+        out = five_bar_grid(args[0], args[1])
     elif kind == "three-rpr-grid":
         out = three_rpr_grid(args[0], int(args[1]))
     elif kind == "analyze":
         out = run_analysis(args[0], args[1], bool(args[2]))
     elif kind == "params":
         out = mechanism_params(args[0])
+    elif kind == "box":
+        out = analysed_box(args[0])
     else:
         raise ValueError(kind)
     out["rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -407,7 +424,7 @@ def agreement(certified: dict[str, Any], grid: dict[str, Any], measure: str) -> 
     return summary + "\n" + indent(table(head, rows))
 
 
-def timing_rows(rows: list[tuple[str, float, float | None, float]]) -> str:
+def timing_rows(rows: Sequence[tuple[str, float, float | None, float]]) -> str:
     return table(
         ["what", "process s", "work s", "peak MiB"],
         [
@@ -425,15 +442,25 @@ def indent(text: str) -> str:
 def case_five_bar(eps: float) -> None:
     print(f"1. five-bar of the paper, [0, pi], precision {eps:g}: regions process vs numpy grid")
     cert = regions_process(PAPER, repr(eps))
-    grid = run_case("five-bar-grid", run_case("params", str(PAPER)), eps)
+    params = run_case("params", str(PAPER))
+    grid = run_case("five-bar-grid", params, eps)
+    # the analysis' finest cells: its box split in powers of two, each at most eps
+    cell = cert["cell"]
+    fine = run_case("five-bar-grid", params, cell)
+    spacing = " x ".join(f"{v:.4g}" for v in cell)
     rows = [
         (f"moveability regions -p {eps:g} ({cert['leaves']} leaves)", cert["wall"], None,
          cert["rss_mib"]),
         (f"numpy grid h={eps:g} ({grid['grid']})", grid["wall"], grid["seconds"],
          grid["rss_mib"]),
+        (f"numpy grid at the analysis' cells {spacing} ({fine['grid']})", fine["wall"],
+         fine["seconds"], fine["rss_mib"]),
     ]  # fmt: skip
     print(indent(timing_rows(rows)))
     print(ratio_line("regions / numpy (processes)", cert["wall"], grid["wall"], 0.5))
+    print(ratio_line("regions / numpy at the analysis' cells", cert["wall"], fine["wall"], 0.5))
+    print("  (the analysis' cells are the box's span over a power of two, at most the")
+    print("  precision: finer than h along both axes here)")
     print(agreement(cert, grid, "area"))
     # what every run pays before its first leaf: numpy and one compiled kernel
     # (with numba's JIT: its import, its initialisation and one cached kernel) and
@@ -505,10 +532,25 @@ def case_three_rpr(parts: int) -> None:
     print()
 
 
+def custom_on_box(eps: float, folder: str) -> Path:
+    """examples/five-bar-custom.toml with its [bounds] the box the built-in five-bar's
+    analysis subdivides: at precision ``eps`` the two analyses then split the same cells."""
+    box = run_case("box", str(PAPER))
+    text = CUSTOM.read_text()
+    text = text[: text.index("[bounds]")] + "[bounds]\n" + "".join(
+        f"{name} = [{lo!r}, {hi!r}]\n"
+        for name, lo, hi in zip(("x", "y"), box["lo"], box["hi"], strict=True)
+    )
+    path = Path(folder) / "five-bar-custom-same-box.toml"
+    path.write_text(text)
+    return path
+
+
 def case_custom(eps: float) -> None:
     print(f"3. user-defined five-bar vs built-in, analyze at precision {eps:g} (fresh processes)")
     built = run_analysis_case(PAPER, eps)
-    custom = run_analysis_case(CUSTOM, eps)
+    with tempfile.TemporaryDirectory() as folder:
+        custom = run_analysis_case(custom_on_box(eps, folder), eps)
     rows = []
     for name, r in (("built-in five-bar", built), ("custom five-bar", custom)):
         area = r["workspace"]["area"]
@@ -520,7 +562,7 @@ def case_custom(eps: float) -> None:
     head = ["what", "process s", "analyze s", "peak MiB", "leaves", "W area", "regions"]
     print(indent(table(head, rows)))
     print(ratio_line("custom / built-in (analyze)", custom["seconds"], built["seconds"], 3.0))
-    print("  (the custom spec's [bounds] box differs from the built-in's pose box)")
+    print("  (the custom spec's [bounds] set to the box the built-in subdivides: the same cells)")
     print()
 
 
