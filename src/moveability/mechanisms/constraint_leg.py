@@ -343,12 +343,38 @@ class ConstraintLeg:
         return 0.5 * (a + b)
 
     # ----------------------------------------------------------------- boxes
-    def _isolate(self, lo: Array, hi: Array) -> _Pieces:
-        """Pieces of the search range that may hold a root, per box."""
-        n = lo.shape[0]
+    def _edges(self) -> Array:
+        """The bounds of the initial pieces of the search range."""
         start, stop = self._range
         edges = np.linspace(start, stop, self.pieces + 1)
         edges[0], edges[-1] = start, stop
+        return edges
+
+    def _compiled(self) -> tuple[tape.Program, Array, Array, tuple[Array, Array]] | None:
+        """The program of the tapes of ``F``, ``dF/dq`` and the ``dF/dX_j``
+        (:func:`moveability.mechanisms.tape.program`), with the initial pieces and
+        their derived inputs; None where a function has no tape. Built once."""
+        if "_compiled_memo" not in self.__dict__:
+            tapes = [getattr(g, "tape", None) for g in (self.f, self.df_dq, *self.df_dx)]
+            found = [t for t in tapes if isinstance(t, tape.Tape)]
+            prog = tape.program(found) if len(found) == len(tapes) else None
+            memo = None
+            if prog is not None:
+                edges = self._edges()
+                q = Interval(edges[:-1], edges[1:])
+                memo = (prog, q.lo, q.hi, tape.derived_values(prog, q))
+            self.__dict__["_compiled_memo"] = memo
+        memo_: tuple[tape.Program, Array, Array, tuple[Array, Array]] | None
+        memo_ = self.__dict__["_compiled_memo"]
+        return memo_
+
+    def _isolate(self, lo: Array, hi: Array) -> _Pieces:
+        """Pieces of the search range that may hold a root, per box."""
+        compiled = self._compiled()
+        if compiled is not None:
+            return self._isolate_compiled(lo, hi, *compiled)
+        n = lo.shape[0]
+        edges = self._edges()
         box = np.repeat(np.arange(n), self.pieces)
         # the same pieces for every box: their sines and cosines computed once
         q_first = ex.tiled(Interval(edges[:-1], edges[1:]), n)
@@ -387,6 +413,35 @@ class ConstraintLeg:
             np.concatenate([d.mono for d in done]) if done else np.zeros(0, dtype=np.int8),
             np.concatenate([d.finite for d in done]) if done else np.zeros(0, dtype=bool),
         )
+        order = np.lexsort((pieces.lo, pieces.box))
+        return pieces.take(order)
+
+    def _isolate_compiled(
+        self,
+        lo: Array,
+        hi: Array,
+        prog: tape.Program,
+        q_lo: Array,
+        q_hi: Array,
+        extra: tuple[Array, Array],
+    ) -> _Pieces:
+        """:meth:`_isolate` a level at a time in one compiled loop
+        (:func:`moveability.mechanisms.tape.isolate_level`): the same pieces."""
+        n = lo.shape[0]
+        counts = np.zeros(n, dtype=np.int64)
+        done = []
+        box: NDArray[np.int64] | None = None  # level 0: each box with every initial piece
+        for level in range(self.depth + 1):
+            if level:
+                if not box.size:  # type: ignore[union-attr]
+                    break
+                extra = tape.derived_values(prog, Interval(q_lo, q_hi))
+            *final, box, q_lo, q_hi = tape.isolate_level(
+                prog, lo, hi, box, (q_lo, q_hi), extra, counts, self.max_pieces,
+                level < self.depth,
+            )  # fmt: skip
+            done.append(final)
+        pieces = _Pieces(*(np.concatenate(parts) for parts in zip(*done, strict=True)))
         order = np.lexsort((pieces.lo, pieces.box))
         return pieces.take(order)
 
