@@ -678,8 +678,15 @@ class ConstraintLeg:
         k = lo.shape[1]
         n_b = boxes.size
         pc = runs.pieces
-        # pieces of these runs
-        sel = np.isin(runs.run_of_piece, r)
+        # G = s2 F positive at both ends of Q: F of one definite sign at both ends
+        f_start = self._box_eval(self.f, lo, hi, boxes, Interval(runs.start[r]))
+        f_end = self._box_eval(self.f, lo, hi, boxes, runs.end[r])
+        may_convex = (f_start.lo > 0) & (f_end.lo > 0)
+        may_concave = (f_start.hi < 0) & (f_end.hi < 0)
+        if not (may_convex | may_concave).any():
+            return np.zeros(n_b, dtype=np.int8), np.zeros(n_b, dtype=bool)
+        # pieces of these runs (of the boxes whose ends may pass: no certificate else)
+        sel = np.isin(runs.run_of_piece, r[may_convex | may_concave])
         p_idx = np.flatnonzero(sel)
         local = np.full(runs.box.size, -1, dtype=np.intp)
         local[r] = np.arange(n_b)
@@ -697,14 +704,7 @@ class ConstraintLeg:
         convex = np.bincount(p_local, weights=convex_p, minlength=n_b) == n_p
         concave = np.bincount(p_local, weights=concave_p, minlength=n_b) == n_p
         s2 = np.where(convex, 1.0, np.where(concave, -1.0, 0.0))
-        # G = s2 F positive at both ends of Q
-        f_start = self._box_eval(self.f, lo, hi, boxes, Interval(runs.start[r]))
-        f_end = self._box_eval(self.f, lo, hi, boxes, runs.end[r])
-        ends = np.where(
-            s2 > 0,
-            (f_start.lo > 0) & (f_end.lo > 0),
-            (f_start.hi < 0) & (f_end.hi < 0),
-        )
+        ends = np.where(s2 > 0, may_convex, may_concave)
         ok = (s2 != 0) & ends
         # the witnesses below only for the boxes passing so far
         keep_p = ok[p_local]

@@ -505,8 +505,11 @@ def _contract(
     n = box.size
     active = np.arange(n)
     count = n
-    # each block evaluates the points of half a block of runs: m1 then m2
+    # each block evaluates the points of half a block of runs
     half = block // 2
+    col1 = np.empty(half, dtype=np.int64)
+    col2 = np.empty(half, dtype=np.int64)
+    point = np.empty(block)
     for _ in range(iterations):
         kept = 0
         for a in range(count):
@@ -523,20 +526,34 @@ def _contract(
             break
         for start in range(0, count, half):
             m = min(half, count - start)
-            for e in range(2 * m):
-                i = active[start + (e % m)]
-                if e < m:
-                    point = 0.5 * (below_a[i] + below_b[i])
+            # the points m1 (below) and m2 (above) of each run, one column for both
+            # while the two brackets are still one (the same point, the same value)
+            cols = 0
+            for t in range(m):
+                i = active[start + t]
+                m1 = 0.5 * (below_a[i] + below_b[i])
+                m2 = 0.5 * (above_a[i] + above_b[i])
+                col1[t] = cols
+                point[cols] = m1
+                cols += 1
+                if m2 == m1 and m1 != 0.0:
+                    col2[t] = col1[t]
                 else:
-                    point = 0.5 * (above_a[i] + above_b[i])
-                b = box[i]
-                for j in range(k):
-                    r_lo[j, e] = lo[b, j]
-                    r_hi[j, e] = hi[b, j]
-                r_lo[k, e] = point
-                r_hi[k, e] = point
+                    col2[t] = cols
+                    point[cols] = m2
+                    cols += 1
+            for t in range(m):
+                b = box[active[start + t]]
+                for e in (col1[t], col2[t]):
+                    for j in range(k):
+                        r_lo[j, e] = lo[b, j]
+                        r_hi[j, e] = hi[b, j]
+            for e in range(cols):
+                p = point[e]
+                r_lo[k, e] = p
+                r_hi[k, e] = p
                 if n_extra:
-                    s_lo, s_hi, c_lo, c_hi = point_sin_cos(point)
+                    s_lo, s_hi, c_lo, c_hi = point_sin_cos(p)
                     for x in range(n_extra):
                         if kinds[x] == 0:
                             r_lo[k + 1 + x, e] = s_lo
@@ -544,15 +561,17 @@ def _contract(
                         else:
                             r_lo[k + 1 + x, e] = c_lo
                             r_hi[k + 1 + x, e] = c_hi
-            _ops(code, r_lo, r_hi, 2 * m)
-            for e in range(m):
-                i = active[start + e]
-                m1 = r_lo[k, e]
-                m2 = r_lo[k, m + e]
-                v1_lo = r_lo[out, e]
-                v1_hi = r_hi[out, e]
-                v2_lo = r_lo[out, m + e]
-                v2_hi = r_hi[out, m + e]
+            _ops(code, r_lo, r_hi, cols)
+            for t in range(m):
+                i = active[start + t]
+                e1 = col1[t]
+                e2 = col2[t]
+                m1 = point[e1]
+                m2 = point[e2]
+                v1_lo = r_lo[out, e1]
+                v1_hi = r_hi[out, e1]
+                v2_lo = r_lo[out, e2]
+                v2_hi = r_hi[out, e2]
                 up = sign[i] > 0
                 neg = (v1_hi < 0) if up else (v1_lo > 0)
                 pos = (v2_lo > 0) if up else (v2_hi < 0)
@@ -564,7 +583,6 @@ def _contract(
                     above_b[i] = m2
                 else:
                     above_a[i] = m2
-
 
 def contract(
     tape: Tape,
