@@ -708,7 +708,8 @@ class ConstraintLeg:
         ok = (s2 != 0) & ends
         # the witnesses below only for the boxes passing so far
         keep_p = ok[p_local]
-        p_box, p_local, q = p_box[keep_p], p_local[keep_p], q[keep_p]
+        # (ex.take: the sines and cosines of q already computed are kept)
+        p_box, p_local, q = p_box[keep_p], p_local[keep_p], ex.take(q, keep_p)
         n_p = np.bincount(p_local, minlength=n_b)
         s2p = s2[p_local]
         q_mid = Interval(q.mid)
@@ -740,10 +741,18 @@ class ConstraintLeg:
         point_in = np.where(pick_in, hi[p_box], lo[p_box])
         point_out = np.where(pick_out, hi[p_box], lo[p_box])
         g_mid = g_at(point_in, point_in, q_mid)
-        reachable = np.bincount(p_local, weights=g_mid.hi < 0, minlength=n_b) > 0
+        ok &= np.bincount(p_local, weights=g_mid.hi < 0, minlength=n_b) > 0  # reachable
+        # the steps below only for the boxes still passing (the others fail anyway)
+        keep_p = ok[p_local]
+        p_box, p_local, s2p, point_out = (a[keep_p] for a in (p_box, p_local, s2p, point_out))
+        q, q_mid = ex.take(q, keep_p), ex.take(q_mid, keep_p)
+        n_p = np.bincount(p_local, minlength=n_b)
         g_all = g_at(point_out, point_out, q)
-        unreachable = np.bincount(p_local, weights=g_all.lo > 0, minlength=n_b) == n_p
-        ok &= reachable & unreachable
+        ok &= np.bincount(p_local, weights=g_all.lo > 0, minlength=n_b) == n_p  # unreachable
+        keep_p = ok[p_local]
+        p_box, p_local, s2p = (a[keep_p] for a in (p_box, p_local, s2p))
+        q, q_mid = ex.take(q, keep_p), ex.take(q_mid, keep_p)
+        n_p = np.bincount(p_local, minlength=n_b)
         # connectivity: an axis along which G is monotone, and its low face reachable
         connected = np.zeros(n_b, dtype=bool)
         for j in range(k):
