@@ -584,6 +584,7 @@ def _contract(
                 else:
                     above_a[i] = m2
 
+
 def contract(
     tape: Tape,
     kinds: NDArray[np.int64],
@@ -640,6 +641,13 @@ class Program:
     ranges: NDArray[np.int64]
     outs: NDArray[np.int64]
     slots: int
+    #: the operations on the joint, derived inputs and constants alone (``fixed``, in
+    #: order, their targets ``fixed_slots``) and the others (``varying``, tape ``t``'s
+    #: at rows ``varying_ranges[t, 0]:varying_ranges[t, 1]``)
+    fixed: NDArray[np.int64]
+    fixed_slots: NDArray[np.int64]
+    varying: NDArray[np.int64]
+    varying_ranges: NDArray[np.int64]
 
 
 def program(tapes: Sequence[Tape]) -> Program | None:
@@ -689,15 +697,29 @@ def program(tapes: Sequence[Tape]) -> Program | None:
         row += code.shape[0]
         const_at += t.const_lo.size
         temp_at += t.slots - t_temp
+    code = np.ascontiguousarray(np.concatenate(codes).reshape(-1, 4))
+    # an operation is fixed when no operand depends on a pose coordinate
+    on_pose = np.zeros(temp_at, dtype=bool)
+    on_pose[:k] = True
+    fixed = np.zeros(code.shape[0], dtype=bool)
+    for row, (_, target, a, b) in enumerate(code):
+        fixed[row] = not (on_pose[a] or on_pose[b])
+        on_pose[target] = not fixed[row]
+    bounds = np.array(ranges, dtype=np.int64).reshape(-1, 2)
+    before = np.concatenate([[0], np.cumsum(~fixed)])
     return Program(
         k=k,
         derived=tuple(derived),
         const_lo=np.ascontiguousarray(np.concatenate([t.const_lo for t in tapes])),
         const_hi=np.ascontiguousarray(np.concatenate([t.const_hi for t in tapes])),
-        code=np.ascontiguousarray(np.concatenate(codes).reshape(-1, 4)),
-        ranges=np.array(ranges, dtype=np.int64).reshape(-1, 2),
+        code=code,
+        ranges=bounds,
         outs=np.array(outs, dtype=np.int64),
         slots=temp_at,
+        fixed=np.ascontiguousarray(code[fixed]).reshape(-1, 4),
+        fixed_slots=np.ascontiguousarray(code[fixed, 1]),
+        varying=np.ascontiguousarray(code[~fixed]).reshape(-1, 4),
+        varying_ranges=np.ascontiguousarray(before[bounds]),
     )
 
 
@@ -756,6 +778,8 @@ def _isolate_level(
     slots: int,
     ranges: NDArray[np.int64],
     outs: NDArray[np.int64],
+    fixed: NDArray[np.int64],
+    fixed_slots: NDArray[np.int64],
     lo: Array,
     hi: Array,
     box: NDArray[np.int64],
@@ -771,7 +795,9 @@ def _isolate_level(
     NDArray[np.int64], Array, Array, NDArray[np.int8], NDArray[np.bool_],
     NDArray[np.int64], Array, Array,
 ]:  # fmt: skip  # pragma: no cover - compiled
-    """One level of ``ConstraintLeg._isolate`` (see :func:`isolate_level`)."""
+    """One level of ``ConstraintLeg._isolate`` (see :func:`isolate_level`); the
+    operations ``fixed`` (on the joint alone, the others in ``code``) evaluated once
+    per enclosure ``q`` when the pieces are every box with each ``q``."""
     n_box = lo.shape[0]
     m = n_box * tile if tile > 0 else box.size
     block = _BLOCK
@@ -782,6 +808,25 @@ def _isolate_level(
         for e in range(block):
             r_lo[first_const + c, e] = const_lo[c]
             r_hi[first_const + c, e] = const_hi[c]
+    # the fixed operations over the enclosures q (tile > 0), copied into the columns
+    n_fixed = fixed_slots.size if tile > 0 else 0
+    base_lo = np.empty((slots, q_lo.size if n_fixed else 0))
+    base_hi = np.empty((slots, q_lo.size if n_fixed else 0))
+    if n_fixed:
+        for c in range(const_lo.size):
+            for e in range(q_lo.size):
+                base_lo[first_const + c, e] = const_lo[c]
+                base_hi[first_const + c, e] = const_hi[c]
+        for e in range(q_lo.size):
+            for j in range(k):  # (no fixed operation reads them)
+                base_lo[j, e] = 0.0
+                base_hi[j, e] = 0.0
+            base_lo[k, e] = q_lo[e]
+            base_hi[k, e] = q_hi[e]
+            for x in range(extra_lo.shape[0]):
+                base_lo[k + 1 + x, e] = extra_lo[x, e]
+                base_hi[k + 1 + x, e] = extra_hi[x, e]
+        _ops(fixed, base_lo, base_hi, q_lo.size)
     f_code = code[ranges[0, 0] : ranges[0, 1]]
     d_code = code[ranges[1, 0] : ranges[1 + k, 1]]  # dF/dq, then dF/dX_j
     out_f = outs[0]
@@ -820,6 +865,11 @@ def _isolate_level(
                 rows[e] = box[start + e]
                 qis[e] = start + e
         _fill(r_lo, r_hi, n, k, lo, hi, rows, q_lo, q_hi, extra_lo, extra_hi, qis)
+        for x in range(n_fixed):
+            slot = fixed_slots[x]
+            for e in range(n):
+                r_lo[slot, e] = base_lo[slot, qis[e]]
+                r_hi[slot, e] = base_hi[slot, qis[e]]
         _ops(f_code, r_lo, r_hi, n)
         c = 0
         for e in range(n):
@@ -839,6 +889,11 @@ def _isolate_level(
             near_rows[t] = rows[near[t]]
             near_qis[t] = qis[near[t]]
         _fill(r_lo, r_hi, c, k, lo, hi, near_rows, q_lo, q_hi, extra_lo, extra_hi, near_qis)
+        for x in range(n_fixed):
+            slot = fixed_slots[x]
+            for t in range(c):
+                r_lo[slot, t] = base_lo[slot, near_qis[t]]
+                r_hi[slot, t] = base_hi[slot, near_qis[t]]
         _ops(d_code, r_lo, r_hi, c)
         for t in range(c):
             dq_lo[t] = r_lo[out_d, t]
@@ -961,14 +1016,22 @@ def isolate_level(
     """
     tile = 0 if box is not None else int(np.size(q[0]))
     box_i = np.zeros(0, dtype=np.int64) if box is None else box
+    # every box with each q: the operations on q alone once per q
+    code, ranges, fixed, fixed_slots = (
+        (prog.varying, prog.varying_ranges, prog.fixed, prog.fixed_slots)
+        if tile
+        else (prog.code, prog.ranges, prog.fixed[:0], prog.fixed_slots[:0])
+    )
     return _isolate_level(
-        prog.code,
+        code,
         prog.const_lo,
         prog.const_hi,
         prog.k,
         prog.slots,
-        prog.ranges,
+        ranges,
         prog.outs,
+        fixed,
+        fixed_slots,
         np.ascontiguousarray(lo, dtype=np.float64),
         np.ascontiguousarray(hi, dtype=np.float64),
         np.ascontiguousarray(box_i, dtype=np.int64),
