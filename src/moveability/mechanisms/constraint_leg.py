@@ -442,7 +442,8 @@ class ConstraintLeg:
             )  # fmt: skip
             done.append(final)
         pieces = _Pieces(*(np.concatenate(parts) for parts in zip(*done, strict=True)))
-        order = np.lexsort((pieces.lo, pieces.box))
+        # each level's pieces are in (box, q) order already
+        order = tape.merge_order(pieces.box, pieces.lo, [d[0].size for d in done])
         return pieces.take(order)
 
     def _f_box(self, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
