@@ -563,7 +563,7 @@ class ConstraintLeg:
 
         # certified runs: F of definite opposite signs at the two ends
         s = runs.mono.astype(np.float64)
-        f_start = self._box_eval(self.f, lo, hi, runs.box, Interval(runs.start))
+        f_start = self._box_eval(self.f, lo, hi, runs.box, ex.points(runs.start))
         f_end = self._box_eval(self.f, lo, hi, runs.box, runs.end)
         cert = (runs.mono != 0) & runs.finite
         cert &= np.where(
@@ -680,7 +680,7 @@ class ConstraintLeg:
         n_b = boxes.size
         pc = runs.pieces
         # G = s2 F positive at both ends of Q: F of one definite sign at both ends
-        f_start = self._box_eval(self.f, lo, hi, boxes, Interval(runs.start[r]))
+        f_start = self._box_eval(self.f, lo, hi, boxes, ex.points(runs.start[r]))
         f_end = self._box_eval(self.f, lo, hi, boxes, runs.end[r])
         may_convex = (f_start.lo > 0) & (f_end.lo > 0)
         may_concave = (f_start.hi < 0) & (f_end.hi < 0)
@@ -713,7 +713,7 @@ class ConstraintLeg:
         p_box, p_local, q = p_box[keep_p], p_local[keep_p], ex.take(q, keep_p)
         n_p = np.bincount(p_local, minlength=n_b)
         s2p = s2[p_local]
-        q_mid = Interval(q.mid)
+        q_mid = ex.points(q.mid)
 
         def g_at(points_lo: Array, points_hi: Array, qq: Interval) -> Interval:
             """G = s2 F over pose boxes (one per piece) and q."""
@@ -863,7 +863,7 @@ class ConstraintLeg:
                     lo_f, hi_f = lo.copy(), hi.copy()
                     face = lo[0, j] if direction > 0 else hi[0, j]
                     lo_f[0, j] = hi_f[0, j] = face
-                    v = self._box_eval(self.f, lo_f, hi_f, box, Interval(q.mid))
+                    v = self._box_eval(self.f, lo_f, hi_f, box, ex.points(q.mid))
                     if (np.where(s2 > 0, v.hi < 0, v.lo > 0)).any():
                         return j, direction, s2, float(runs.start[0]), float(runs.end.hi[0])
         raise ValueError(f"leg {self.joint}: no monotone axis")  # pragma: no cover
