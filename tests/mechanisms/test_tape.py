@@ -151,3 +151,57 @@ def test_operations_among_parameters_are_rounded_outwards(expr_of, values) -> No
     q_box = Interval(np.zeros(1))
     for value in (interpreted(g, one, one, at, q_box), tp.run(g.tape, one, one, at, q_box)):
         assert Fraction(float(value.lo[0])) <= exact <= Fraction(float(value.hi[0]))
+
+
+PRISMATIC = {
+    "mechanism": "custom",
+    "pose": ["x", "y"],
+    "joints": ["d"],
+    "legs": [{"joint": "d", "kind": "prismatic", "constraint": "x**2 + (y - 1)**2 - d**2"}],
+    "limits": {"d": [2.0, 6.0]},
+    "bounds": {"x": [-8, 8], "y": [-8, 8]},
+}
+
+
+@pytest.mark.parametrize(
+    ("source", "seed"),
+    [("examples/five-bar-custom.toml", 0), ("examples/delta-custom.toml", 1), ("prismatic", 2)],
+)
+def test_compiled_isolation_matches_the_interpreted_one(source, seed, monkeypatch) -> None:
+    """``ConstraintLeg._isolate`` (and ``reach``) of user-defined legs over random
+    boxes (points, small and large ones, a few unbounded): the compiled levels
+    (``tape.isolate_level``) give the pieces of the Python loop, bit for bit."""
+    from moveability.mechanisms.constraint_leg import ConstraintLeg
+    from moveability.mechanisms.custom import CustomMechanism
+
+    if source == "prismatic":
+        mechanism = CustomMechanism(PRISMATIC)
+    else:
+        mechanism = from_spec(load_spec(source))
+    legs = [leg for leg in mechanism.legs if leg._compiled() is not None]
+    assert legs
+    rng = np.random.default_rng(seed)
+    low, high = (np.asarray(b, dtype=float) for b in mechanism.bounds)
+    k = low.size
+    centre = rng.uniform(low, high, size=(600, k))
+    size = rng.choice([0.0, 1e-3, 0.02, 0.3, 3.0], size=(600, 1)) * (high - low) / 10
+    lo, hi = centre - size, centre + size
+    lo[:5, 0], hi[5:10, -1] = -np.inf, np.inf
+    for leg in legs:
+        with np.errstate(all="ignore"):  # the unbounded boxes' centres
+            compiled = (leg._isolate(lo, hi), leg.reach(lo, hi))
+            with monkeypatch.context() as m:
+                m.setattr(ConstraintLeg, "_compiled", lambda self: None)
+                plain = (leg._isolate(lo, hi), leg.reach(lo, hi))
+        for name in ("box", "lo", "hi", "mono", "finite"):
+            a, b = getattr(compiled[0], name), getattr(plain[0], name)
+            assert a.dtype == b.dtype and np.array_equal(a, b), name
+        assert (compiled[0].mono != 0).sum() > 100 and (compiled[0].mono == 0).any()
+        assert (compiled[1].status == plain[1].status).all()
+        assert (compiled[1].fold_connected == plain[1].fold_connected).all()
+        for a, b in zip(
+            [*compiled[1].branches, compiled[1].hull],
+            [*plain[1].branches, plain[1].hull],
+            strict=True,
+        ):
+            assert same(a, b)

@@ -343,12 +343,38 @@ class ConstraintLeg:
         return 0.5 * (a + b)
 
     # ----------------------------------------------------------------- boxes
-    def _isolate(self, lo: Array, hi: Array) -> _Pieces:
-        """Pieces of the search range that may hold a root, per box."""
-        n = lo.shape[0]
+    def _edges(self) -> Array:
+        """The bounds of the initial pieces of the search range."""
         start, stop = self._range
         edges = np.linspace(start, stop, self.pieces + 1)
         edges[0], edges[-1] = start, stop
+        return edges
+
+    def _compiled(self) -> tuple[tape.Program, Array, Array, tuple[Array, Array]] | None:
+        """The program of the tapes of ``F``, ``dF/dq`` and the ``dF/dX_j``
+        (:func:`moveability.mechanisms.tape.program`), with the initial pieces and
+        their derived inputs; None where a function has no tape. Built once."""
+        if "_compiled_memo" not in self.__dict__:
+            tapes = [getattr(g, "tape", None) for g in (self.f, self.df_dq, *self.df_dx)]
+            found = [t for t in tapes if isinstance(t, tape.Tape)]
+            prog = tape.program(found) if len(found) == len(tapes) else None
+            memo = None
+            if prog is not None:
+                edges = self._edges()
+                q = Interval(edges[:-1], edges[1:])
+                memo = (prog, q.lo, q.hi, tape.derived_values(prog, q))
+            self.__dict__["_compiled_memo"] = memo
+        memo_: tuple[tape.Program, Array, Array, tuple[Array, Array]] | None
+        memo_ = self.__dict__["_compiled_memo"]
+        return memo_
+
+    def _isolate(self, lo: Array, hi: Array) -> _Pieces:
+        """Pieces of the search range that may hold a root, per box."""
+        compiled = self._compiled()
+        if compiled is not None:
+            return self._isolate_compiled(lo, hi, *compiled)
+        n = lo.shape[0]
+        edges = self._edges()
         box = np.repeat(np.arange(n), self.pieces)
         # the same pieces for every box: their sines and cosines computed once
         q_first = ex.tiled(Interval(edges[:-1], edges[1:]), n)
@@ -388,6 +414,36 @@ class ConstraintLeg:
             np.concatenate([d.finite for d in done]) if done else np.zeros(0, dtype=bool),
         )
         order = np.lexsort((pieces.lo, pieces.box))
+        return pieces.take(order)
+
+    def _isolate_compiled(
+        self,
+        lo: Array,
+        hi: Array,
+        prog: tape.Program,
+        q_lo: Array,
+        q_hi: Array,
+        extra: tuple[Array, Array],
+    ) -> _Pieces:
+        """:meth:`_isolate` a level at a time in one compiled loop
+        (:func:`moveability.mechanisms.tape.isolate_level`): the same pieces."""
+        n = lo.shape[0]
+        counts = np.zeros(n, dtype=np.int64)
+        done = []
+        box: NDArray[np.int64] | None = None  # level 0: each box with every initial piece
+        for level in range(self.depth + 1):
+            if level:
+                if not box.size:  # type: ignore[union-attr]
+                    break
+                extra = tape.derived_values(prog, Interval(q_lo, q_hi))
+            *final, box, q_lo, q_hi = tape.isolate_level(
+                prog, lo, hi, box, (q_lo, q_hi), extra, counts, self.max_pieces,
+                level < self.depth,
+            )  # fmt: skip
+            done.append(final)
+        pieces = _Pieces(*(np.concatenate(parts) for parts in zip(*done, strict=True)))
+        # each level's pieces are in (box, q) order already
+        order = tape.merge_order(pieces.box, pieces.lo, [d[0].size for d in done])
         return pieces.take(order)
 
     def _f_box(self, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
@@ -507,7 +563,7 @@ class ConstraintLeg:
 
         # certified runs: F of definite opposite signs at the two ends
         s = runs.mono.astype(np.float64)
-        f_start = self._box_eval(self.f, lo, hi, runs.box, Interval(runs.start))
+        f_start = self._box_eval(self.f, lo, hi, runs.box, ex.points(runs.start))
         f_end = self._box_eval(self.f, lo, hi, runs.box, runs.end)
         cert = (runs.mono != 0) & runs.finite
         cert &= np.where(
@@ -623,8 +679,15 @@ class ConstraintLeg:
         k = lo.shape[1]
         n_b = boxes.size
         pc = runs.pieces
-        # pieces of these runs
-        sel = np.isin(runs.run_of_piece, r)
+        # G = s2 F positive at both ends of Q: F of one definite sign at both ends
+        f_start = self._box_eval(self.f, lo, hi, boxes, ex.points(runs.start[r]))
+        f_end = self._box_eval(self.f, lo, hi, boxes, runs.end[r])
+        may_convex = (f_start.lo > 0) & (f_end.lo > 0)
+        may_concave = (f_start.hi < 0) & (f_end.hi < 0)
+        if not (may_convex | may_concave).any():
+            return np.zeros(n_b, dtype=np.int8), np.zeros(n_b, dtype=bool)
+        # pieces of these runs (of the boxes whose ends may pass: no certificate else)
+        sel = np.isin(runs.run_of_piece, r[may_convex | may_concave])
         p_idx = np.flatnonzero(sel)
         local = np.full(runs.box.size, -1, dtype=np.intp)
         local[r] = np.arange(n_b)
@@ -642,21 +705,15 @@ class ConstraintLeg:
         convex = np.bincount(p_local, weights=convex_p, minlength=n_b) == n_p
         concave = np.bincount(p_local, weights=concave_p, minlength=n_b) == n_p
         s2 = np.where(convex, 1.0, np.where(concave, -1.0, 0.0))
-        # G = s2 F positive at both ends of Q
-        f_start = self._box_eval(self.f, lo, hi, boxes, Interval(runs.start[r]))
-        f_end = self._box_eval(self.f, lo, hi, boxes, runs.end[r])
-        ends = np.where(
-            s2 > 0,
-            (f_start.lo > 0) & (f_end.lo > 0),
-            (f_start.hi < 0) & (f_end.hi < 0),
-        )
+        ends = np.where(s2 > 0, may_convex, may_concave)
         ok = (s2 != 0) & ends
         # the witnesses below only for the boxes passing so far
         keep_p = ok[p_local]
-        p_box, p_local, q = p_box[keep_p], p_local[keep_p], q[keep_p]
+        # (ex.take: the sines and cosines of q already computed are kept)
+        p_box, p_local, q = p_box[keep_p], p_local[keep_p], ex.take(q, keep_p)
         n_p = np.bincount(p_local, minlength=n_b)
         s2p = s2[p_local]
-        q_mid = Interval(q.mid)
+        q_mid = ex.points(q.mid)
 
         def g_at(points_lo: Array, points_hi: Array, qq: Interval) -> Interval:
             """G = s2 F over pose boxes (one per piece) and q."""
@@ -685,10 +742,18 @@ class ConstraintLeg:
         point_in = np.where(pick_in, hi[p_box], lo[p_box])
         point_out = np.where(pick_out, hi[p_box], lo[p_box])
         g_mid = g_at(point_in, point_in, q_mid)
-        reachable = np.bincount(p_local, weights=g_mid.hi < 0, minlength=n_b) > 0
+        ok &= np.bincount(p_local, weights=g_mid.hi < 0, minlength=n_b) > 0  # reachable
+        # the steps below only for the boxes still passing (the others fail anyway)
+        keep_p = ok[p_local]
+        p_box, p_local, s2p, point_out = (a[keep_p] for a in (p_box, p_local, s2p, point_out))
+        q, q_mid = ex.take(q, keep_p), ex.take(q_mid, keep_p)
+        n_p = np.bincount(p_local, minlength=n_b)
         g_all = g_at(point_out, point_out, q)
-        unreachable = np.bincount(p_local, weights=g_all.lo > 0, minlength=n_b) == n_p
-        ok &= reachable & unreachable
+        ok &= np.bincount(p_local, weights=g_all.lo > 0, minlength=n_b) == n_p  # unreachable
+        keep_p = ok[p_local]
+        p_box, p_local, s2p = (a[keep_p] for a in (p_box, p_local, s2p))
+        q, q_mid = ex.take(q, keep_p), ex.take(q_mid, keep_p)
+        n_p = np.bincount(p_local, minlength=n_b)
         # connectivity: an axis along which G is monotone, and its low face reachable
         connected = np.zeros(n_b, dtype=bool)
         for j in range(k):
@@ -798,7 +863,7 @@ class ConstraintLeg:
                     lo_f, hi_f = lo.copy(), hi.copy()
                     face = lo[0, j] if direction > 0 else hi[0, j]
                     lo_f[0, j] = hi_f[0, j] = face
-                    v = self._box_eval(self.f, lo_f, hi_f, box, Interval(q.mid))
+                    v = self._box_eval(self.f, lo_f, hi_f, box, ex.points(q.mid))
                     if (np.where(s2 > 0, v.hi < 0, v.lo > 0)).any():
                         return j, direction, s2, float(runs.start[0]), float(runs.end.hi[0])
         raise ValueError(f"leg {self.joint}: no monotone axis")  # pragma: no cover

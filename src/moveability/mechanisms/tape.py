@@ -505,8 +505,11 @@ def _contract(
     n = box.size
     active = np.arange(n)
     count = n
-    # each block evaluates the points of half a block of runs: m1 then m2
+    # each block evaluates the points of half a block of runs
     half = block // 2
+    col1 = np.empty(half, dtype=np.int64)
+    col2 = np.empty(half, dtype=np.int64)
+    point = np.empty(block)
     for _ in range(iterations):
         kept = 0
         for a in range(count):
@@ -523,20 +526,34 @@ def _contract(
             break
         for start in range(0, count, half):
             m = min(half, count - start)
-            for e in range(2 * m):
-                i = active[start + (e % m)]
-                if e < m:
-                    point = 0.5 * (below_a[i] + below_b[i])
+            # the points m1 (below) and m2 (above) of each run, one column for both
+            # while the two brackets are still one (the same point, the same value)
+            cols = 0
+            for t in range(m):
+                i = active[start + t]
+                m1 = 0.5 * (below_a[i] + below_b[i])
+                m2 = 0.5 * (above_a[i] + above_b[i])
+                col1[t] = cols
+                point[cols] = m1
+                cols += 1
+                if m2 == m1 and m1 != 0.0:
+                    col2[t] = col1[t]
                 else:
-                    point = 0.5 * (above_a[i] + above_b[i])
-                b = box[i]
-                for j in range(k):
-                    r_lo[j, e] = lo[b, j]
-                    r_hi[j, e] = hi[b, j]
-                r_lo[k, e] = point
-                r_hi[k, e] = point
+                    col2[t] = cols
+                    point[cols] = m2
+                    cols += 1
+            for t in range(m):
+                b = box[active[start + t]]
+                for e in (col1[t], col2[t]):
+                    for j in range(k):
+                        r_lo[j, e] = lo[b, j]
+                        r_hi[j, e] = hi[b, j]
+            for e in range(cols):
+                p = point[e]
+                r_lo[k, e] = p
+                r_hi[k, e] = p
                 if n_extra:
-                    s_lo, s_hi, c_lo, c_hi = point_sin_cos(point)
+                    s_lo, s_hi, c_lo, c_hi = point_sin_cos(p)
                     for x in range(n_extra):
                         if kinds[x] == 0:
                             r_lo[k + 1 + x, e] = s_lo
@@ -544,15 +561,17 @@ def _contract(
                         else:
                             r_lo[k + 1 + x, e] = c_lo
                             r_hi[k + 1 + x, e] = c_hi
-            _ops(code, r_lo, r_hi, 2 * m)
-            for e in range(m):
-                i = active[start + e]
-                m1 = r_lo[k, e]
-                m2 = r_lo[k, m + e]
-                v1_lo = r_lo[out, e]
-                v1_hi = r_hi[out, e]
-                v2_lo = r_lo[out, m + e]
-                v2_hi = r_hi[out, m + e]
+            _ops(code, r_lo, r_hi, cols)
+            for t in range(m):
+                i = active[start + t]
+                e1 = col1[t]
+                e2 = col2[t]
+                m1 = point[e1]
+                m2 = point[e2]
+                v1_lo = r_lo[out, e1]
+                v1_hi = r_hi[out, e1]
+                v2_lo = r_lo[out, e2]
+                v2_hi = r_hi[out, e2]
                 up = sign[i] > 0
                 neg = (v1_hi < 0) if up else (v1_lo > 0)
                 pos = (v2_lo > 0) if up else (v2_hi < 0)
@@ -603,3 +622,468 @@ def contract(
         float(rtol),
     )
     return below_a, above_b
+
+
+# ----------------------------------------------------------------- isolation
+@dataclass(frozen=True, eq=False)
+class Program:
+    """Tapes of one ``k`` over one register file: slots ``[0, k]`` the inputs, then
+    the derived inputs (all functions of the joint alone, ``derived``), the
+    constants of every tape, and their temporaries. Tape ``t``'s operations are
+    the rows ``ranges[t, 0]:ranges[t, 1]`` of ``code``, its value slot
+    ``outs[t]``."""
+
+    k: int
+    derived: tuple[Callable[..., Any], ...]
+    const_lo: Array
+    const_hi: Array
+    code: NDArray[np.int64]
+    ranges: NDArray[np.int64]
+    outs: NDArray[np.int64]
+    slots: int
+    #: the operations on the joint, derived inputs and constants alone (``fixed``, in
+    #: order, their targets ``fixed_slots``) and the others (``varying``, tape ``t``'s
+    #: at rows ``varying_ranges[t, 0]:varying_ranges[t, 1]``)
+    fixed: NDArray[np.int64]
+    fixed_slots: NDArray[np.int64]
+    varying: NDArray[np.int64]
+    varying_ranges: NDArray[np.int64]
+
+
+def program(tapes: Sequence[Tape]) -> Program | None:
+    """The tapes merged into one :class:`Program`, their derived inputs shared;
+    None if a derived input depends on a pose coordinate (its value then differs
+    between a box and its centre).
+
+    Examples
+    --------
+    >>> from moveability.mechanisms import expressions as ex
+    >>> sin = traced(ex.sin, "sin")
+    >>> p = program([trace(lambda x, q: x * sin(q), 1), trace(lambda x, q: sin(q) - 2.0, 1)])
+    >>> len(p.derived), p.ranges.tolist()
+    (1, [[0, 1], [1, 2]])
+    """
+    if not tapes:
+        return None
+    k = tapes[0].k
+    derived: list[Callable[..., Any]] = []
+    for t in tapes:
+        if t.k != k:
+            return None
+        for function, args in t.derived:
+            if args != (k,):
+                return None
+            if not any(function is f for f in derived):
+                derived.append(function)
+    first_const = k + 1 + len(derived)
+    n_const = sum(t.const_lo.size for t in tapes)
+    const_at, temp_at = first_const, first_const + n_const
+    codes, ranges, outs = [], [], []
+    row = 0
+    for t in tapes:
+        t_const = t.k + 1 + len(t.derived)
+        t_temp = t_const + t.const_lo.size
+        shared = [next(i for i, f in enumerate(derived) if f is g) for g, _ in t.derived]
+        mapping = np.empty(t.slots, dtype=np.int64)
+        mapping[: k + 1] = np.arange(k + 1)
+        mapping[k + 1 : t_const] = k + 1 + np.array(shared, dtype=np.int64)
+        mapping[t_const:t_temp] = const_at + np.arange(t.const_lo.size)
+        mapping[t_temp:] = temp_at + np.arange(t.slots - t_temp)
+        code = t.code.copy()
+        code[:, 1:] = mapping[t.code[:, 1:]]
+        codes.append(code)
+        ranges.append((row, row + code.shape[0]))
+        outs.append(int(mapping[t.out]))
+        row += code.shape[0]
+        const_at += t.const_lo.size
+        temp_at += t.slots - t_temp
+    code = np.ascontiguousarray(np.concatenate(codes).reshape(-1, 4))
+    # an operation is fixed when no operand depends on a pose coordinate
+    on_pose = np.zeros(temp_at, dtype=bool)
+    on_pose[:k] = True
+    fixed = np.zeros(code.shape[0], dtype=bool)
+    for row, (_, target, a, b) in enumerate(code):
+        fixed[row] = not (on_pose[a] or on_pose[b])
+        on_pose[target] = not fixed[row]
+    bounds = np.array(ranges, dtype=np.int64).reshape(-1, 2)
+    before = np.concatenate([[0], np.cumsum(~fixed)])
+    return Program(
+        k=k,
+        derived=tuple(derived),
+        const_lo=np.ascontiguousarray(np.concatenate([t.const_lo for t in tapes])),
+        const_hi=np.ascontiguousarray(np.concatenate([t.const_hi for t in tapes])),
+        code=code,
+        ranges=bounds,
+        outs=np.array(outs, dtype=np.int64),
+        slots=temp_at,
+        fixed=np.ascontiguousarray(code[fixed]).reshape(-1, 4),
+        fixed_slots=np.ascontiguousarray(code[fixed, 1]),
+        varying=np.ascontiguousarray(code[~fixed]).reshape(-1, 4),
+        varying_ranges=np.ascontiguousarray(before[bounds]),
+    )
+
+
+def derived_values(prog: Program, q: Interval) -> tuple[Array, Array]:
+    """The derived inputs of ``prog`` over the joint enclosures ``q`` (shape
+    ``(m,)``), computed as :func:`run` computes them: arrays of shape ``(d, m)``."""
+    m = q.lo.shape[0]
+    out_lo = np.empty((len(prog.derived), m))
+    out_hi = np.empty((len(prog.derived), m))
+    for e, function in enumerate(prog.derived):
+        with np.errstate(all="ignore"):
+            v = function(q)
+        if not isinstance(v, Interval):
+            v = Interval(v)
+        out_lo[e] = v.lo
+        out_hi[e] = v.hi
+    return out_lo, out_hi
+
+
+@kernel(inline=True)
+def _fill(
+    r_lo: Array,
+    r_hi: Array,
+    n: int,
+    k: int,
+    x_lo: Array,
+    x_hi: Array,
+    rows: NDArray[np.int64],
+    q_lo: Array,
+    q_hi: Array,
+    extra_lo: Array,
+    extra_hi: Array,
+    qis: NDArray[np.int64],
+) -> None:  # pragma: no cover - compiled
+    """The inputs of register columns ``[0, n)``: pose box ``rows[e]``, joint
+    enclosure and derived inputs ``qis[e]``."""
+    for j in range(k):
+        for e in range(n):
+            r_lo[j, e] = x_lo[rows[e], j]
+            r_hi[j, e] = x_hi[rows[e], j]
+    for e in range(n):
+        r_lo[k, e] = q_lo[qis[e]]
+        r_hi[k, e] = q_hi[qis[e]]
+    for x in range(extra_lo.shape[0]):
+        for e in range(n):
+            r_lo[k + 1 + x, e] = extra_lo[x, qis[e]]
+            r_hi[k + 1 + x, e] = extra_hi[x, qis[e]]
+
+
+@kernel
+def _isolate_level(
+    code: NDArray[np.int64],
+    const_lo: Array,
+    const_hi: Array,
+    k: int,
+    slots: int,
+    ranges: NDArray[np.int64],
+    outs: NDArray[np.int64],
+    fixed: NDArray[np.int64],
+    fixed_slots: NDArray[np.int64],
+    lo: Array,
+    hi: Array,
+    box: NDArray[np.int64],
+    tile: int,
+    q_lo: Array,
+    q_hi: Array,
+    extra_lo: Array,
+    extra_hi: Array,
+    counts: NDArray[np.int64],
+    max_pieces: int,
+    split: bool,
+) -> tuple[
+    NDArray[np.int64], Array, Array, NDArray[np.int8], NDArray[np.bool_],
+    NDArray[np.int64], Array, Array,
+]:  # fmt: skip  # pragma: no cover - compiled
+    """One level of ``ConstraintLeg._isolate`` (see :func:`isolate_level`); the
+    operations ``fixed`` (on the joint alone, the others in ``code``) evaluated once
+    per enclosure ``q`` when the pieces are every box with each ``q``."""
+    n_box = lo.shape[0]
+    m = n_box * tile if tile > 0 else box.size
+    block = _BLOCK
+    r_lo = np.empty((slots, block))
+    r_hi = np.empty((slots, block))
+    first_const = k + 1 + extra_lo.shape[0]
+    for c in range(const_lo.size):
+        for e in range(block):
+            r_lo[first_const + c, e] = const_lo[c]
+            r_hi[first_const + c, e] = const_hi[c]
+    # the fixed operations over the enclosures q (tile > 0), copied into the columns
+    n_fixed = fixed_slots.size if tile > 0 else 0
+    base_lo = np.empty((slots, q_lo.size if n_fixed else 0))
+    base_hi = np.empty((slots, q_lo.size if n_fixed else 0))
+    if n_fixed:
+        for c in range(const_lo.size):
+            for e in range(q_lo.size):
+                base_lo[first_const + c, e] = const_lo[c]
+                base_hi[first_const + c, e] = const_hi[c]
+        for e in range(q_lo.size):
+            for j in range(k):  # (no fixed operation reads them)
+                base_lo[j, e] = 0.0
+                base_hi[j, e] = 0.0
+            base_lo[k, e] = q_lo[e]
+            base_hi[k, e] = q_hi[e]
+            for x in range(extra_lo.shape[0]):
+                base_lo[k + 1 + x, e] = extra_lo[x, e]
+                base_hi[k + 1 + x, e] = extra_hi[x, e]
+        _ops(fixed, base_lo, base_hi, q_lo.size)
+    f_code = code[ranges[0, 0] : ranges[0, 1]]
+    d_code = code[ranges[1, 0] : ranges[1 + k, 1]]  # dF/dq, then dF/dX_j
+    out_f = outs[0]
+    out_d = outs[1]
+    rows = np.empty(block, dtype=np.int64)
+    qis = np.empty(block, dtype=np.int64)
+    nat_lo = np.empty(block)
+    nat_hi = np.empty(block)
+    near = np.empty(block, dtype=np.int64)
+    dq_lo = np.empty(block)
+    dq_hi = np.empty(block)
+    dj_lo = np.empty((max(k, 1), block))
+    dj_hi = np.empty((max(k, 1), block))
+    k_box = np.empty(m, dtype=np.int64)
+    k_qi = np.empty(m, dtype=np.int64)
+    k_mono = np.empty(m, dtype=np.int8)
+    k_finite = np.empty(m, dtype=np.bool_)
+    n_kept = 0
+    current = np.zeros(n_box, dtype=np.int64)
+    b_next = 0
+    q_next = 0
+    near_rows = np.empty(block, dtype=np.int64)
+    near_qis = np.empty(block, dtype=np.int64)
+    for start in range(0, m, block):
+        n = min(block, m - start)
+        # the natural enclosure of F over box x piece
+        for e in range(n):
+            if tile > 0:
+                rows[e] = b_next
+                qis[e] = q_next
+                q_next += 1
+                if q_next == tile:
+                    q_next = 0
+                    b_next += 1
+            else:
+                rows[e] = box[start + e]
+                qis[e] = start + e
+        _fill(r_lo, r_hi, n, k, lo, hi, rows, q_lo, q_hi, extra_lo, extra_hi, qis)
+        for x in range(n_fixed):
+            slot = fixed_slots[x]
+            for e in range(n):
+                r_lo[slot, e] = base_lo[slot, qis[e]]
+                r_hi[slot, e] = base_hi[slot, qis[e]]
+        _ops(f_code, r_lo, r_hi, n)
+        c = 0
+        for e in range(n):
+            a = r_lo[out_f, e]
+            z = r_hi[out_f, e]
+            a = -np.inf if a != a else a
+            z = np.inf if z != z else z
+            nat_lo[e] = a
+            nat_hi[e] = z
+            if a <= 0.0 and z >= 0.0:
+                near[c] = e
+                c += 1
+        if c == 0:
+            continue
+        # where it holds 0: dF/dq and dF/dX_j over box x piece (packed in columns 0..c)
+        for t in range(c):
+            near_rows[t] = rows[near[t]]
+            near_qis[t] = qis[near[t]]
+        _fill(r_lo, r_hi, c, k, lo, hi, near_rows, q_lo, q_hi, extra_lo, extra_hi, near_qis)
+        for x in range(n_fixed):
+            slot = fixed_slots[x]
+            for t in range(c):
+                r_lo[slot, t] = base_lo[slot, near_qis[t]]
+                r_hi[slot, t] = base_hi[slot, near_qis[t]]
+        _ops(d_code, r_lo, r_hi, c)
+        for t in range(c):
+            dq_lo[t] = r_lo[out_d, t]
+            dq_hi[t] = r_hi[out_d, t]
+            for j in range(k):
+                dj_lo[j, t] = r_lo[outs[2 + j], t]
+                dj_hi[j, t] = r_hi[outs[2 + j], t]
+        # F at the box's centre (the joint and derived inputs are still in place)
+        for t in range(c):
+            b = rows[near[t]]
+            for j in range(k):
+                centre = 0.5 * (lo[b, j] + hi[b, j])
+                r_lo[j, t] = centre
+                r_hi[j, t] = centre
+        _ops(f_code, r_lo, r_hi, c)
+        for t in range(c):
+            e = near[t]
+            b = rows[e]
+            # the mean-value form, each offset widened by an ulp of its bounds
+            m_lo = r_lo[out_f, t]
+            m_hi = r_hi[out_f, t]
+            for j in range(k):
+                centre = 0.5 * (lo[b, j] + hi[b, j])
+                o_lo = lo[b, j] - centre
+                o_hi = hi[b, j] - centre
+                o_lo = np.nextafter(o_lo if (o_lo < 0.0 or o_lo != o_lo) else 0.0, -np.inf)
+                o_hi = np.nextafter(o_hi if (o_hi > 0.0 or o_hi != o_hi) else 0.0, np.inf)
+                p_lo, p_hi = interval_mul(dj_lo[j, t], dj_hi[j, t], o_lo, o_hi)
+                m_lo, m_hi = interval_add(m_lo, m_hi, p_lo, p_hi)
+            m_lo = -np.inf if m_lo != m_lo else m_lo
+            m_hi = np.inf if m_hi != m_hi else m_hi
+            f_lo = max(nat_lo[e], m_lo)
+            f_hi = min(nat_hi[e], m_hi)
+            if f_lo > 0.0 or f_hi < 0.0:
+                continue
+            finite = np.isfinite(f_lo) and np.isfinite(f_hi)
+            mono = 0
+            if finite and dq_lo[t] > 0.0:
+                mono = 1
+            elif finite and dq_hi[t] < 0.0:
+                mono = -1
+            k_box[n_kept] = b
+            k_qi[n_kept] = qis[e]
+            k_mono[n_kept] = mono
+            k_finite[n_kept] = finite
+            n_kept += 1
+            current[b] += 1
+    # the pieces split: no certified sign, and their box not yet at max_pieces
+    cut = np.empty(n_kept, dtype=np.bool_)
+    n_cut = 0
+    for t in range(n_kept):
+        b = k_box[t]
+        cut[t] = split and k_mono[t] == 0 and counts[b] + current[b] <= max_pieces
+        if cut[t]:
+            n_cut += 1
+    n_final = n_kept - n_cut
+    f_box = np.empty(n_final, dtype=np.int64)
+    f_lo = np.empty(n_final)
+    f_hi = np.empty(n_final)
+    f_mono = np.empty(n_final, dtype=np.int8)
+    f_finite = np.empty(n_final, dtype=np.bool_)
+    s_box = np.empty(2 * n_cut, dtype=np.int64)
+    s_lo = np.empty(2 * n_cut)
+    s_hi = np.empty(2 * n_cut)
+    u = 0
+    v = 0
+    for t in range(n_kept):
+        b = k_box[t]
+        qi = k_qi[t]
+        a = q_lo[qi]
+        z = q_hi[qi]
+        if cut[t]:
+            mid = 0.5 * (a + z)
+            s_box[v] = b
+            s_box[v + 1] = b
+            s_lo[v] = a
+            s_hi[v] = mid
+            s_lo[v + 1] = mid
+            s_hi[v + 1] = z
+            v += 2
+        else:
+            f_box[u] = b
+            f_lo[u] = a
+            f_hi[u] = z
+            f_mono[u] = k_mono[t]
+            f_finite[u] = k_finite[t]
+            counts[b] += 1
+            u += 1
+    return f_box, f_lo, f_hi, f_mono, f_finite, s_box, s_lo, s_hi
+
+
+def isolate_level(
+    prog: Program,
+    lo: Array,
+    hi: Array,
+    box: NDArray[np.int64] | None,
+    q: tuple[Array, Array],
+    extra: tuple[Array, Array],
+    counts: NDArray[np.int64],
+    max_pieces: int,
+    split: bool,
+) -> tuple[Any, ...]:
+    """One level of the root isolation of ``ConstraintLeg._isolate`` in one
+    compiled loop, for the program of the tapes of ``F``, ``dF/dq`` and the
+    ``dF/dX_j`` (in that order).
+
+    Over each piece (box ``box[i]`` of ``[lo, hi]``, joint enclosure ``q[i]``):
+    the enclosure of ``F``, the natural one met with the mean-value form about
+    the box's centre where the natural one holds 0. A piece whose enclosure
+    excludes 0 is dropped; the others get the certified sign of ``dF/dq`` (0 if
+    none, or if ``F`` is not finite) and are final, or are halved when they have
+    no sign, ``split`` holds and their box has at most ``max_pieces`` pieces:
+    those of ``counts`` (final ones of the levels before, updated here) and this
+    level's kept ones. The same steps on the same floats as the interpreted level.
+
+    ``extra`` holds the derived inputs of ``q`` (:func:`derived_values`). With
+    ``box`` None the pieces are every box with each enclosure of ``q`` in turn.
+    Returns the final pieces (box, lo, hi, sign, finite) and those of the next
+    level (box, lo, hi).
+    """
+    tile = 0 if box is not None else int(np.size(q[0]))
+    box_i = np.zeros(0, dtype=np.int64) if box is None else box
+    # every box with each q: the operations on q alone once per q
+    code, ranges, fixed, fixed_slots = (
+        (prog.varying, prog.varying_ranges, prog.fixed, prog.fixed_slots)
+        if tile
+        else (prog.code, prog.ranges, prog.fixed[:0], prog.fixed_slots[:0])
+    )
+    return _isolate_level(
+        code,
+        prog.const_lo,
+        prog.const_hi,
+        prog.k,
+        prog.slots,
+        ranges,
+        prog.outs,
+        fixed,
+        fixed_slots,
+        np.ascontiguousarray(lo, dtype=np.float64),
+        np.ascontiguousarray(hi, dtype=np.float64),
+        np.ascontiguousarray(box_i, dtype=np.int64),
+        tile,
+        np.ascontiguousarray(q[0], dtype=np.float64),
+        np.ascontiguousarray(q[1], dtype=np.float64),
+        np.ascontiguousarray(extra[0], dtype=np.float64),
+        np.ascontiguousarray(extra[1], dtype=np.float64),
+        counts,
+        int(max_pieces),
+        bool(split),
+    )
+
+
+@kernel
+def _merge_order(
+    box: NDArray[np.int64], lo: Array, bounds: NDArray[np.int64]
+) -> NDArray[np.int64]:  # pragma: no cover - compiled
+    """The order of ``np.lexsort((lo, box))`` for segments ``bounds[s]:bounds[s + 1]``
+    each already in that order (and no NaN in ``lo``): their stable merge."""
+    n = box.size
+    segments = bounds.size - 1
+    head = bounds[:-1].copy()
+    out = np.empty(n, dtype=np.int64)
+    for o in range(n):
+        best = -1
+        best_segment = 0
+        for s in range(segments):
+            i = head[s]
+            if i < bounds[s + 1] and (
+                best < 0 or box[i] < box[best] or (box[i] == box[best] and lo[i] < lo[best])
+            ):
+                best = i
+                best_segment = s
+        out[o] = best
+        head[best_segment] += 1
+    return out
+
+
+def merge_order(box: NDArray[np.int64], lo: Array, sizes: Sequence[int]) -> NDArray[np.int64]:
+    """``np.lexsort((lo, box))`` of consecutive segments of ``sizes`` elements, each
+    sorted by box, then ``lo`` (not NaN): a merge.
+
+    Examples
+    --------
+    >>> box, lo = np.array([0, 2, 0, 1, 2]), np.array([0.5, 0.0, 0.7, 0.1, -1.0])
+    >>> merge_order(box, lo, [2, 3]).tolist() == np.lexsort((lo, box)).tolist()
+    True
+    """
+    bounds = np.concatenate([[0], np.cumsum(np.asarray(sizes, dtype=np.int64))])
+    return _merge_order(
+        np.ascontiguousarray(box, dtype=np.int64),
+        np.ascontiguousarray(lo, dtype=np.float64),
+        bounds.astype(np.int64),
+    )
