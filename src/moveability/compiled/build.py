@@ -174,6 +174,20 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         (array(I8, 2), array(B1), array(I8), array(I8))
     ],
     "moveability.analysis.result._grown": [(array(B1), array(I8, 2))],
+    "moveability.mechanisms._delta_kernels.det_a_prepare": [
+        (R2, R2, R2, R2, R2, W1, W1, array(F8, 3, out=True))
+    ],
+    "moveability.mechanisms._delta_kernels.regular_boxes": [(R2, R2, R2, array(B1, out=True))],
+    "moveability.mechanisms._delta_kernels.centre_args": [(R2, R2, R2, array(F8, 3, out=True))],
+    "moveability.mechanisms._delta_kernels.centre_turn": [
+        (R2, R2, R2, R2, R2, array(F8, 3, out=True))
+    ],
+    "moveability.mechanisms._delta_kernels.centre_angles": [
+        (R2, R2, R2, array(F8, 3), array(F8, 3), array(F8, 3), array(F8, 3, out=True))
+    ],
+    "moveability.mechanisms._delta_kernels.mean_value_bounds": [
+        (R2, R2, array(F8, 3), array(I8), array(F8, 3), R2, W1, W1)
+    ],
 }
 
 
