@@ -185,8 +185,11 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.mechanisms._delta_kernels.centre_angles": [
         (R2, R2, R2, array(F8, 3), array(F8, 3), array(F8, 3), array(F8, 3, out=True))
     ],
+    "moveability.mechanisms._delta_kernels.centre_trig": [
+        (array(F8, 3), array(F8, 4, out=True))
+    ],
     "moveability.mechanisms._delta_kernels.mean_value_bounds": [
-        (R2, R2, array(F8, 3), array(I8), array(F8, 3), R2, W1, W1)
+        (R2, R2, array(F8, 3), array(I8), array(F8, 4), R2, W1, W1)
     ],
 }
 

@@ -57,6 +57,7 @@ from ..types import Array
 __all__ = [
     "centre_angles",
     "centre_args",
+    "centre_trig",
     "centre_turn",
     "det_a_prepare",
     "mean_value_bounds",
@@ -553,40 +554,50 @@ def centre_angles(
 
 
 @kernel
+def centre_trig(centre: Array, out: Array) -> None:  # pragma: no cover - compiled
+    """The cosines and sines of both branches' angles at the boxes' centres
+    (``DeltaLeg.branch_boxes``: the direction plus alpha on branch 0, minus
+    alpha on branch 1, from ``centre`` (4, 3, n) of :func:`centre_angles`)
+    into ``out`` (2, 4, 3, n): branch ``b``'s at ``out[b]`` (see
+    :func:`_trig_of`)."""
+    n = centre.shape[2]
+    m_lo, m_hi = np.empty((3, n)), np.empty((3, n))
+    for branch in range(2):
+        for k in range(3):
+            for j in range(n):
+                d_lo, d_hi = centre[0, k, j], centre[1, k, j]
+                al_lo, al_hi = centre[2, k, j], centre[3, k, j]
+                if branch == 0:
+                    m_lo[k, j], m_hi[k, j] = interval_add(d_lo, d_hi, al_lo, al_hi)
+                else:
+                    m_lo[k, j], m_hi[k, j] = interval_sub(d_lo, d_hi, al_lo, al_hi)
+        out[branch] = _trig_of(m_lo, m_hi)
+
+
+@kernel
 def mean_value_bounds(
     lo: Array,
     hi: Array,
     box_trig: Array,
     branches: NDArray[np.int64],
-    centre: Array,
+    centre_trig: Array,
     legs: Array,
     out_lo: Array,
     out_hi: Array,
 ) -> None:  # pragma: no cover - compiled
     """``Delta.det_a_boxes``' mean-value form over the (n, 3) boxes where every leg
     is regular, intersected with the enclosures in ``out`` (n,) where its bounds
-    are finite.
+    are finite: ``D(m) + sum_j dD/dx_j (x_j - m_j)``.
 
-    The angle of each leg's branch (``branches`` (3,)) at the boxes' centres
-    first (``DeltaLeg.branch_boxes``): the direction plus or minus alpha
-    (``centre`` (4, 3, n), from :func:`centre_angles`). Then ``D(m) + sum_j
-    dD/dx_j (x_j - m_j)``: ``D(m)`` as ``Delta._det_a_plain`` at the centre,
-    ``dD/dx_j`` as ``Mechanism.det_a_rate`` (``base._det_rate_span``'s order)
-    with the rows of A over the box (the cosines and sines of the angle
-    enclosures in ``box_trig`` (4, 3, n), see :func:`_trig_of`), their
-    partials (``DeltaLeg.row_partials``) and the joints' gradients
+    ``D(m)`` as ``Delta._det_a_plain`` at the centre ``m``, with the cosines and
+    sines of the angles of each leg's branch (``branches`` (3,)) there
+    (``centre_trig`` (2, 4, 3, n), from :func:`centre_trig`); ``dD/dx_j`` as
+    ``Mechanism.det_a_rate`` (``base._det_rate_span``'s order) with the rows of
+    A over the box (the cosines and sines of the angle enclosures in
+    ``box_trig`` (4, 3, n), see :func:`_trig_of`), their partials
+    (``DeltaLeg.row_partials``) and the joints' gradients
     (``DeltaLeg.joint_gradient``)."""
     n = lo.shape[0]
-    m_lo, m_hi = np.empty((3, n)), np.empty((3, n))
-    for k in range(3):
-        for j in range(n):
-            d_lo, d_hi = centre[0, k, j], centre[1, k, j]
-            al_lo, al_hi = centre[2, k, j], centre[3, k, j]
-            if branches[k] == 0:
-                m_lo[k, j], m_hi[k, j] = interval_add(d_lo, d_hi, al_lo, al_hi)
-            else:
-                m_lo[k, j], m_hi[k, j] = interval_sub(d_lo, d_hi, al_lo, al_hi)
-    centre_trig = _trig_of(m_lo, m_hi)
     # the products of the partials along the pose (the identity) with the
     # velocity (a unit vector): 1 * 1, and 0 * 1, 1 * 0 or 0 * 0
     one_lo, one_hi = interval_mul(1.0, 1.0, 1.0, 1.0)
@@ -610,10 +621,11 @@ def mean_value_bounds(
                 s_lo[mx + axis, j] = m
                 s_hi[mx + axis, j] = m
             for k in range(3):
-                s_lo[mtrig + 2 * k, j] = centre_trig[0, k, s + j]
-                s_hi[mtrig + 2 * k, j] = centre_trig[1, k, s + j]
-                s_lo[mtrig + 2 * k + 1, j] = centre_trig[2, k, s + j]
-                s_hi[mtrig + 2 * k + 1, j] = centre_trig[3, k, s + j]
+                b = branches[k]
+                s_lo[mtrig + 2 * k, j] = centre_trig[b, 0, k, s + j]
+                s_hi[mtrig + 2 * k, j] = centre_trig[b, 1, k, s + j]
+                s_lo[mtrig + 2 * k + 1, j] = centre_trig[b, 2, k, s + j]
+                s_hi[mtrig + 2 * k + 1, j] = centre_trig[b, 3, k, s + j]
         # D(m)
         _rows(s_lo, s_hi, mx, mtrig, legs, mrows, marm_trig, size)
         _plain_rest(s_lo, s_hi, mx, mrows, marm_trig, legs, tot, size)

@@ -837,24 +837,24 @@ class Delta(Mechanism):
         kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, out_lo, out_hi, trig)
         if posture is None:
             return Interval(out_lo, out_hi)
-        idx, centre = self._centres(lo, hi)
+        idx, centre_trig = self._centres(lo, hi)
         if not idx.size:
             return Interval(out_lo, out_hi)
         sub_lo, sub_hi = out_lo[idx], out_hi[idx]
         branches = np.asarray(self.postures[posture], dtype=np.int64)
         kernels.mean_value_bounds(
-            lo[idx], hi[idx], np.ascontiguousarray(trig[:, :, idx]), branches, centre, legs,
+            lo[idx], hi[idx], np.ascontiguousarray(trig[:, :, idx]), branches, centre_trig, legs,
             sub_lo, sub_hi,
         )  # fmt: skip
         out_lo[idx], out_hi[idx] = sub_lo, sub_hi
         return Interval(out_lo, out_hi)
 
     def _centres(self, lo: Array, hi: Array) -> tuple[NDArray[np.intp], Array]:
-        """The boxes where every leg is regular, and the parts of the legs' angles
-        at their centres that do not depend on the branch (4, 3, m: the bounds
-        of the direction, then of alpha; see ``_delta_kernels.centre_angles``),
-        for :meth:`det_a_boxes`. Kept for the last boxes (the same floats, bit
-        for bit): the sheets ask for every posture over the same boxes."""
+        """The boxes where every leg is regular, and the cosines and sines of both
+        branches' angles at their centres (2, 4, 3, m: see
+        ``_delta_kernels.centre_trig``), for :meth:`det_a_boxes`. Kept for the
+        last boxes (the same floats, bit for bit): the sheets ask for every
+        posture over the same boxes."""
         last = self.__dict__.get("_last_centres")
         if (
             last is not None
@@ -886,8 +886,10 @@ class Delta(Mechanism):
             np.arctan2(turned[y], turned[x], out=corners[i])
         centre = np.empty((4, 3, m))
         kernels.centre_angles(cs, sn, ref, corners, turned, acos, centre)
-        self.__dict__["_last_centres"] = (lo.copy(), hi.copy(), idx, centre)
-        return idx, centre
+        trig = np.empty((2, 4, 3, m))
+        kernels.centre_trig(centre, trig)
+        self.__dict__["_last_centres"] = (lo.copy(), hi.copy(), idx, trig)
+        return idx, trig
 
     def _det_a_boxes_intervals(
         self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
