@@ -13,7 +13,7 @@ element by element (``mul_into`` and the slots' passes, ``interval_mul``,
 itself). The bounds are thus the same floats, bit for bit
 (tests/mechanisms/test_delta_kernels.py compares them on random boxes of every
 kind). det A runs chunk by chunk, one vectorised pass per operation over the
-chunk's boxes (the "slots" of :mod:`moveability.intervals`), the legs' reach
+chunk's boxes (the "slots" of :mod:`moveability.intervals`), the legs' ``g``
 box by box: no array is allocated per operation and no Python runs between
 the operations.
 
@@ -22,12 +22,15 @@ box's direction from its centre are left to numpy, between the kernels (as in
 :mod:`._rr_kernels`): numpy may evaluate them with its own vectorised code
 (SVML), whose results differ from the C library's in the last bits, so they
 are called on contiguous arrays of the same arguments as in the Interval code.
-The mean-value form thus runs in four kernels: :func:`det_a_prepare` (the
-stacked rows' enclosure of every box, and where every leg is regular),
-:func:`centre_args` (at the centres of the regular boxes: the arguments of
-alpha's arccos and of the direction's arctan2), :func:`centre_turn` (the box
-of the centre turned by its direction, whose corners' arctan2 numpy takes) and
-:func:`mean_value_bounds` (the branches' angles at the centres, then the form).
+:func:`det_a_prepare` gives the stacked rows' enclosure of every box. The
+mean-value form needs, at the centres of the boxes where every leg is regular
+(:func:`regular_boxes`), the angles of the legs' branches: :func:`centre_args`
+(the arguments of alpha's arccos and of the direction's arctan2),
+:func:`centre_turn` (the box of the centre turned by its direction, whose
+corners' arctan2 numpy takes), :func:`centre_angles` (the direction and alpha)
+and :func:`centre_trig` (the cosines and sines of both branches' angles). None
+of these depends on the posture: ``Delta`` keeps them for the last boxes, and
+:func:`mean_value_bounds` computes the form for each posture.
 
 A leg enters as a row of ``Delta``'s constants (its entries are named below):
 the enclosures of its unit vector ``u`` and of ``r - R``, the arm, and the
@@ -235,7 +238,7 @@ def _atan_bounds(lo: float, hi: float, cut: bool) -> tuple[float, float]:  # pra
 # (slots x _CHUNK), and each interval operation one compiled loop over the
 # chunk's boxes. Slots are passed as np.int64 (see intervals.Slot).
 
-#: boxes per chunk: the scratch (about 110 slots, 2 x 8 bytes a box each) stays in cache
+#: boxes per chunk: the scratch (80 slots, 2 x 8 bytes a box each) stays in cache
 _CHUNK = 128
 
 
