@@ -181,6 +181,23 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         )
     ],
     "moveability.mechanisms.tape._merge_order": [(array(I8), R1, array(I8))],
+    "moveability.mechanisms._delta_kernels.det_a_prepare": [
+        (R2, R2, R2, R2, R2, W1, W1, array(F8, 3, out=True))
+    ],
+    "moveability.mechanisms._delta_kernels.regular_boxes": [(R2, R2, R2, array(B1, out=True))],
+    "moveability.mechanisms._delta_kernels.centre_args": [(R2, R2, R2, array(F8, 3, out=True))],
+    "moveability.mechanisms._delta_kernels.centre_turn": [
+        (R2, R2, R2, R2, R2, array(F8, 3, out=True))
+    ],
+    "moveability.mechanisms._delta_kernels.centre_angles": [
+        (R2, R2, R2, array(F8, 3), array(F8, 3), array(F8, 3), array(F8, 3, out=True))
+    ],
+    "moveability.mechanisms._delta_kernels.centre_trig": [
+        (array(F8, 3), array(F8, 4, out=True))
+    ],
+    "moveability.mechanisms._delta_kernels.mean_value_bounds": [
+        (R2, R2, array(F8, 3), array(I8), array(F8, 4), R2, W1, W1)
+    ],
 }
 
 

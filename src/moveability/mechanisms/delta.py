@@ -49,6 +49,7 @@ vectors: enclosures use an enclosure of ``sqrt(3)/2``, points its float.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -59,6 +60,7 @@ from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..limits import JointLimit
 from ..types import Array
+from . import _delta_kernels as kernels
 from .base import (
     FOLD_INNER,
     FOLD_OUTER,
@@ -71,6 +73,7 @@ from .base import (
     round_down,
     round_up,
 )
+from .rr_leg import flat_bounds
 
 __all__ = ["Circumradius", "Delta", "DeltaLeg"]
 
@@ -91,6 +94,19 @@ def _unit(index: int) -> tuple[tuple[float, float], tuple[Interval, Interval]]:
 
 def _quiet() -> Any:
     return np.errstate(all="ignore")
+
+
+def _pose_boxes(lo: Array, hi: Array) -> tuple[Array, Array] | None:
+    """Boxes of poses as the compiled kernels take them: (n, 3) C-contiguous
+    float arrays of one shape; None for anything else (the Interval code takes
+    it)."""
+    lo_a, hi_a = np.asarray(lo), np.asarray(hi)
+    if lo_a.ndim != 2 or lo_a.shape[1] != 3 or lo_a.shape != hi_a.shape:
+        return None
+    return (
+        np.ascontiguousarray(lo_a, dtype=np.float64),
+        np.ascontiguousarray(hi_a, dtype=np.float64),
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -746,6 +762,34 @@ class Delta(Mechanism):
             np.array([round_up(v) for v in hi + pad]),
         )
 
+    @cached_property
+    def _leg_constants(self) -> Array:
+        """The legs as the kernels of :mod:`._delta_kernels` take them (3,
+        ``N_CONSTANTS``): the enclosures of ``u``, of ``r - R``, of ``la^2 - lb^2``
+        and of ``1 / la``, computed by the same Interval operations as the
+        reference."""
+        out = np.zeros((3, kernels.N_CONSTANTS))
+        la = self.arm
+        c = iv.square(iv.as_interval(la)) - iv.square(iv.as_interval(self.rod))
+        divisor = iv.as_interval(la)
+        # Interval.__truediv__'s [1 / hi, 1 / lo], each rounded outwards
+        inv_lo, inv_hi = iv.widen_down(1.0 / divisor.hi), iv.widen_up(1.0 / divisor.lo)
+        for i, leg in enumerate(self.delta_legs):
+            _, (ux, uy) = _unit(i)
+            offset = leg._offset()
+            values: dict[int, Any] = {
+                kernels.UX_LO: ux.lo, kernels.UX_HI: ux.hi,
+                kernels.UY_LO: uy.lo, kernels.UY_HI: uy.hi,
+                kernels.OFF_LO: offset.lo, kernels.OFF_HI: offset.hi,
+                kernels.ARM: la, kernels.TWO_ARM: 2.0 * la,
+                kernels.C_LO: c.lo, kernels.C_HI: c.hi,
+                kernels.INV_LO: inv_lo, kernels.INV_HI: inv_hi,
+            }  # fmt: skip
+            for index, value in values.items():
+                out[i, index] = float(value)
+        out.flags.writeable = False
+        return out
+
     def det_a_boxes(
         self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
     ) -> Interval:
@@ -760,7 +804,97 @@ class Delta(Mechanism):
         det A along ``e_j`` with the joints at their gradients' rates
         (:meth:`det_a_rate`). It is far narrower on small boxes, where the
         natural form counts the joints' spread several times.
+
+        Compiled (:mod:`._delta_kernels`, with numpy's arccos and arctan2
+        between the kernels): the bounds of :meth:`_det_a_boxes_intervals`, bit
+        for bit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> m = Delta(10.0, 4.0, 8.0, 15.0)
+        >>> lo, hi = np.array([[0.4, -1.1, -14.1]]), np.array([[0.6, -0.9, -13.9]])
+        >>> point = np.array([[0.5, -1.0, -14.0]])
+        >>> q = m.joint_angles(point)[0]  # (postures, legs)
+        >>> angles = [leg.reach(lo, hi).branches[int(b)] for leg, b in zip(m.legs, m.postures[0])]
+        >>> det = m.det_a_boxes(lo, hi, angles, posture=0)
+        >>> bool(det.lo[0] <= m.det_a(point, q[:1])[0] <= det.hi[0])
+        True
         """
+        boxes = _pose_boxes(lo, hi)
+        if boxes is None or len(angles) != 3:
+            return self._det_a_boxes_intervals(lo, hi, angles, posture)
+        lo, hi = boxes
+        n = lo.shape[0]
+        parts = [flat_bounds(a, n) for a in angles]
+        if parts[0] is None or parts[1] is None or parts[2] is None:
+            return self._det_a_boxes_intervals(lo, hi, angles, posture)
+        a_lo = np.stack([parts[0][0], parts[1][0], parts[2][0]])
+        a_hi = np.stack([parts[0][1], parts[1][1], parts[2][1]])
+        legs = self._leg_constants
+        out_lo, out_hi = np.empty(n), np.empty(n)
+        trig = np.empty((4, 3, n))
+        kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, out_lo, out_hi, trig)
+        if posture is None:
+            return Interval(out_lo, out_hi)
+        idx, centre_trig = self._centres(lo, hi)
+        if not idx.size:
+            return Interval(out_lo, out_hi)
+        sub_lo, sub_hi = out_lo[idx], out_hi[idx]
+        branches = np.asarray(self.postures[posture], dtype=np.int64)
+        kernels.mean_value_bounds(
+            lo[idx], hi[idx], np.ascontiguousarray(trig[:, :, idx]), branches, centre_trig, legs,
+            sub_lo, sub_hi,
+        )  # fmt: skip
+        out_lo[idx], out_hi[idx] = sub_lo, sub_hi
+        return Interval(out_lo, out_hi)
+
+    def _centres(self, lo: Array, hi: Array) -> tuple[NDArray[np.intp], Array]:
+        """The boxes where every leg is regular, and the cosines and sines of both
+        branches' angles at their centres (2, 4, 3, m: see
+        ``_delta_kernels.centre_trig``), for :meth:`det_a_boxes`. Kept for the
+        last boxes (the same floats, bit for bit): the sheets ask for every
+        posture over the same boxes."""
+        last = self.__dict__.get("_last_centres")
+        if (
+            last is not None
+            and last[0].shape == lo.shape
+            and np.array_equal(last[0].view(np.uint64), lo.view(np.uint64))
+            and np.array_equal(last[1].view(np.uint64), hi.view(np.uint64))
+        ):
+            return last[2], last[3]
+        legs = self._leg_constants
+        regular = np.empty(lo.shape[0], dtype=bool)
+        kernels.regular_boxes(lo, hi, legs, regular)
+        idx = np.flatnonzero(regular)
+        blo, bhi = lo[idx], hi[idx]
+        m = idx.size
+        # the library functions of branch_boxes at the centres, by numpy on
+        # contiguous arrays (see the kernels' notes): alpha's arccos, the
+        # directions of the centres and of the corners of the turned boxes
+        args = np.empty((4, 3, m))
+        kernels.centre_args(blo, bhi, legs, args)
+        acos = np.arccos(args[:2])
+        theta_m = np.arctan2(args[3], args[2])
+        cs, sn = np.cos(theta_m), np.sin(theta_m)
+        ref = np.arctan2(sn, cs)
+        turned = np.empty((4, 3, m))
+        kernels.centre_turn(blo, bhi, cs, sn, legs, turned)
+        corners = np.empty((4, 3, m))
+        # (uw, us): lo lo, lo hi, hi lo, hi hi
+        for i, (y, x) in enumerate(((2, 0), (2, 1), (3, 0), (3, 1))):
+            np.arctan2(turned[y], turned[x], out=corners[i])
+        centre = np.empty((4, 3, m))
+        kernels.centre_angles(cs, sn, ref, corners, turned, acos, centre)
+        trig = np.empty((2, 4, 3, m))
+        kernels.centre_trig(centre, trig)
+        self.__dict__["_last_centres"] = (lo.copy(), hi.copy(), idx, trig)
+        return idx, trig
+
+    def _det_a_boxes_intervals(
+        self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
+    ) -> Interval:
+        """:meth:`det_a_boxes` by :class:`Interval` operations (the reference)."""
         out = self._det_a_plain(lo, hi, angles)
         if posture is None or not lo.shape[0]:
             return out

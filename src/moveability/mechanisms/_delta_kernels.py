@@ -1,0 +1,690 @@
+"""Compiled interval enclosures of the Delta: det A over boxes of poses, the
+stacked rows and the sheet's mean-value form (``Delta.det_a_boxes``).
+
+Each kernel computes what :class:`~.delta.Delta` and :class:`~.delta.DeltaLeg`
+compute with :class:`~moveability.intervals.Interval` operations (kept there as
+the reference, ``Delta._det_a_boxes_intervals``): the same operations on the
+same operands in the same order, each rounded outwards by the compiled
+primitives of :mod:`moveability.intervals` that the Interval operators apply
+element by element (``mul_into`` and the slots' passes, ``interval_mul``,
+``interval_add``, ``interval_sub``; ``next_below`` in its inlined form
+``step_down``; the library functions' widening ``move_below`` with
+``_rel(4)``; the cosines and sines of angle enclosures by ``_trig_bounds``
+itself). The bounds are thus the same floats, bit for bit
+(tests/mechanisms/test_delta_kernels.py compares them on random boxes of every
+kind). det A runs chunk by chunk, one vectorised pass per operation over the
+chunk's boxes (the "slots" of :mod:`moveability.intervals`), the legs' ``g``
+box by box: no array is allocated per operation and no Python runs between
+the operations.
+
+The library functions ``arccos``, ``arctan2`` and the ``cos`` and ``sin`` of a
+box's direction from its centre are left to numpy, between the kernels (as in
+:mod:`._rr_kernels`): numpy may evaluate them with its own vectorised code
+(SVML), whose results differ from the C library's in the last bits, so they
+are called on contiguous arrays of the same arguments as in the Interval code.
+:func:`det_a_prepare` gives the stacked rows' enclosure of every box. The
+mean-value form needs, at the centres of the boxes where every leg is regular
+(:func:`regular_boxes`), the angles of the legs' branches: :func:`centre_args`
+(the arguments of alpha's arccos and of the direction's arctan2),
+:func:`centre_turn` (the box of the centre turned by its direction, whose
+corners' arctan2 numpy takes), :func:`centre_angles` (the direction and alpha)
+and :func:`centre_trig` (the cosines and sines of both branches' angles). None
+of these depends on the posture: ``Delta`` keeps them for the last boxes, and
+:func:`mean_value_bounds` computes the form for each posture.
+
+A leg enters as a row of ``Delta``'s constants (its entries are named below):
+the enclosures of its unit vector ``u`` and of ``r - R``, the arm, and the
+constants of ``DeltaLeg._g_range``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..compiled import kernel
+from ..intervals import (
+    Slot,
+    _trig_bounds,
+    interval_add,
+    interval_mul,
+    interval_sub,
+    move_below,
+    slot_add,
+    slot_mul,
+    slot_sub,
+    step_down,
+)
+from ..types import Array
+
+__all__ = [
+    "centre_angles",
+    "centre_args",
+    "centre_trig",
+    "centre_turn",
+    "det_a_prepare",
+    "mean_value_bounds",
+    "regular_boxes",
+]
+
+# the entries of a leg's constants (Delta._leg_constants): the enclosures of u_x,
+# u_y and of r - R, the arm la and 2 la, the enclosure of la^2 - lb^2, and that of
+# 1 / la (as Interval.__truediv__ takes it)
+(
+    UX_LO, UX_HI, UY_LO, UY_HI, OFF_LO, OFF_HI, ARM, TWO_ARM, C_LO, C_HI, INV_LO, INV_HI,
+    N_CONSTANTS,
+) = range(13)  # fmt: skip
+
+_PI_UP = float(np.nextafter(np.pi, np.inf))
+#: the smallest positive subnormal
+_TINY = 5e-324
+#: ``intervals._rel(4)`` and 4 ulps of ``_TINY``: the library functions' widening
+_LIB_REL = 5 * 2.0**-52
+_LIB_TINY = 4 * _TINY
+
+
+# ------------------------------------------------------------------ one element
+@kernel(inline=True)
+def _up(x: float) -> float:  # pragma: no cover - compiled
+    """An upper bound moved up by one ulp (or a few): ``intervals._above``."""
+    return -step_down(-x, False)
+
+
+@kernel(inline=True)
+def _lib_down(x: float) -> float:  # pragma: no cover - compiled
+    """``widen_down(x, _LIB_ULPS)``: a library function's lower bound."""
+    return move_below(x, _LIB_REL, _LIB_TINY, False)
+
+
+@kernel(inline=True)
+def _lib_up(x: float) -> float:  # pragma: no cover - compiled
+    """``widen_up(x, _LIB_ULPS)``."""
+    return -move_below(-x, _LIB_REL, _LIB_TINY, False)
+
+
+@kernel(inline=True)
+def _max(a: float, b: float) -> float:  # pragma: no cover - compiled
+    """``np.maximum`` of two floats: NaN if either is."""
+    return np.nan if ((a != a) | (b != b)) else (a if a >= b else b)
+
+
+@kernel(inline=True)
+def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
+    """``np.minimum`` of two floats: NaN if either is."""
+    return np.nan if ((a != a) | (b != b)) else (a if a <= b else b)
+
+
+@kernel(inline=True)
+def _reciprocal(x: float) -> float:  # pragma: no cover - compiled
+    """``1.0 / x`` as numpy rounds it, an infinity of the zero's sign for a zero
+    (compiled code would raise)."""
+    return np.copysign(np.inf, x) if x == 0.0 else 1.0 / x
+
+
+@kernel(inline=True)
+def _div(
+    a_lo: float, a_hi: float, b_lo: float, b_hi: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``Interval.__truediv__``: the product with ``[1 / hi, 1 / lo]`` rounded
+    outwards, or with the whole line where the divisor may vanish."""
+    straddles = (b_lo <= 0) & (b_hi >= 0)
+    i_lo = -np.inf if straddles else step_down(_reciprocal(b_hi), False)
+    i_hi = np.inf if straddles else _up(_reciprocal(b_lo))
+    return interval_mul(a_lo, a_hi, i_lo, i_hi)
+
+
+@kernel(inline=True)
+def _square(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``intervals.square``: ``x * x``, from 0 where ``x`` straddles 0."""
+    s_lo, s_hi = interval_mul(lo, hi, lo, hi)
+    straddles = (lo <= 0) & (hi >= 0)
+    return (0.0 if straddles else _max(s_lo, 0.0)), s_hi
+
+
+@kernel(inline=True)
+def _sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``intervals.sqrt``: the square root of the non-negative part; NaN above
+    where there is none."""
+    low = 0.0 if lo <= 0 else step_down(np.sqrt(_max(lo, 0.0)), False)
+    high = np.nan if hi < 0 else _up(np.sqrt(_max(hi, 0.0)))
+    return _max(low, 0.0), high
+
+
+@kernel(inline=True)
+def _clip_mid(lo: float, hi: float) -> float:  # pragma: no cover - compiled
+    """``Interval.mid``: ``np.clip(0.5 * lo + 0.5 * hi, lo, hi)``."""
+    return _min(_max(0.5 * lo + 0.5 * hi, lo), hi)
+
+
+@kernel(inline=True)
+def _plane(
+    x_lo: float, x_hi: float, y_lo: float, y_hi: float, leg: Array
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """``DeltaLeg._plane_boxes``: ``s = x u_x + y u_y + (r - R)`` and ``d = y u_x -
+    x u_y`` over a box of ``(x, y)``."""
+    p_lo, p_hi = interval_mul(x_lo, x_hi, leg[UX_LO], leg[UX_HI])
+    q_lo, q_hi = interval_mul(y_lo, y_hi, leg[UY_LO], leg[UY_HI])
+    s_lo, s_hi = interval_add(p_lo, p_hi, q_lo, q_hi)
+    s_lo, s_hi = interval_add(s_lo, s_hi, leg[OFF_LO], leg[OFF_HI])
+    p_lo, p_hi = interval_mul(y_lo, y_hi, leg[UX_LO], leg[UX_HI])
+    q_lo, q_hi = interval_mul(x_lo, x_hi, leg[UY_LO], leg[UY_HI])
+    d_lo, d_hi = interval_sub(p_lo, p_hi, q_lo, q_hi)
+    return s_lo, s_hi, d_lo, d_hi
+
+
+@kernel(inline=True)
+def _g_at(tv: float, dv: float, leg: Array) -> tuple[float, float]:  # pragma: no cover
+    """``g`` of ``DeltaLeg._g_range`` at the numbers ``t``, ``d^2``:
+    ``(square(t) + d^2 + c) / (t * 2 la)``."""
+    a_lo, a_hi = _square(tv, tv)
+    a_lo, a_hi = interval_add(a_lo, a_hi, dv, dv)
+    a_lo, a_hi = interval_add(a_lo, a_hi, leg[C_LO], leg[C_HI])
+    b_lo, b_hi = interval_mul(tv, tv, leg[TWO_ARM], leg[TWO_ARM])
+    return _div(a_lo, a_hi, b_lo, b_hi)
+
+
+@kernel
+def _g_range(
+    t_lo: float, t_hi: float, d_lo: float, d_hi: float, leg: Array
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``DeltaLeg._g_range``: the bounds of ``g`` for ``t`` in ``[t_lo, t_hi]`` and
+    ``d^2`` in ``[d_lo, d_hi]`` (the ends of ``t``, and the minimum inside where
+    ``g`` is convex in ``t``); a NaN bound made infinite."""
+    g_hi = _max(_g_at(t_lo, d_hi, leg)[1], _g_at(t_hi, d_hi, leg)[1])
+    g_lo = _min(_g_at(t_lo, d_lo, leg)[0], _g_at(t_hi, d_lo, leg)[0])
+    k_lo, k_hi = interval_add(d_lo, d_lo, leg[C_LO], leg[C_HI])
+    r_lo, r_hi = _sqrt(k_lo, k_hi)
+    if (k_lo > 0) & (r_lo <= t_hi) & (r_hi >= t_lo):
+        g_lo = _min(g_lo, interval_mul(r_lo, r_hi, leg[INV_LO], leg[INV_HI])[0])
+    g_lo = -np.inf if g_lo != g_lo else g_lo
+    g_hi = np.inf if g_hi != g_hi else g_hi
+    return g_lo, g_hi
+
+
+@kernel
+def _g_boxes(
+    x_lo: float,
+    x_hi: float,
+    y_lo: float,
+    y_hi: float,
+    z_lo: float,
+    z_hi: float,
+    leg: Array,
+) -> tuple[float, float, float, float, float]:  # pragma: no cover - compiled
+    """``DeltaLeg._g_boxes`` of one box: the bounds of ``g`` and the lower bound of
+    ``t = sqrt(s^2 + z^2)``, then ``s`` (its bounds)."""
+    s_lo, s_hi, d_lo, d_hi = _plane(x_lo, x_hi, y_lo, y_hi, leg)
+    a_lo, a_hi = _square(s_lo, s_hi)
+    b_lo, b_hi = _square(z_lo, z_hi)
+    a_lo, a_hi = interval_add(a_lo, a_hi, b_lo, b_hi)
+    t_lo, t_hi = _sqrt(a_lo, a_hi)
+    d2_lo, d2_hi = _square(d_lo, d_hi)
+    g_lo, g_hi = _g_range(t_lo, t_hi, d2_lo, d2_hi, leg)
+    return g_lo, g_hi, t_lo, s_lo, s_hi
+
+
+@kernel(inline=True)
+def _atan_bounds(lo: float, hi: float, cut: bool) -> tuple[float, float]:  # pragma: no cover
+    """``intervals.arctan2`` from the least and greatest arctan2 of the corners:
+    widened, the whole ``[-pi, pi]`` where the box meets the cut."""
+    low = -_PI_UP if cut else _lib_down(lo)
+    high = _PI_UP if cut else _lib_up(hi)
+    return _max(low, -_PI_UP), _min(high, _PI_UP)
+
+
+# ------------------------------------------------------------------ passes
+# det A works chunk by chunk (as mechanisms/_rpr_kernels.py does): each quantity
+# of a chunk's boxes is a row (a "slot") of two scratch arrays ``lo``, ``hi``
+# (slots x _CHUNK), and each interval operation one compiled loop over the
+# chunk's boxes. Slots are passed as np.int64 (see intervals.Slot).
+
+#: boxes per chunk: the scratch (80 slots, 2 x 8 bytes a box each) stays in cache
+_CHUNK = 128
+
+
+@kernel
+def _mul_c(
+    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = slot ``a`` * the interval ``[c_lo, c_hi]`` (``Interval * c``)."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_mul(a_lo[j], a_hi[j], c_lo, c_hi)
+
+
+@kernel
+def _add_c(
+    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = slot ``a`` + the interval ``[c_lo, c_hi]``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_add(a_lo[j], a_hi[j], c_lo, c_hi)
+
+
+@kernel
+def _sub_c(
+    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = slot ``a`` - the interval ``[c_lo, c_hi]``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_sub(a_lo[j], a_hi[j], c_lo, c_hi)
+
+
+@kernel
+def _c_sub(
+    lo: Array, hi: Array, c_lo: float, c_hi: float, a: Slot, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = the interval ``[c_lo, c_hi]`` - slot ``a``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_sub(c_lo, c_hi, a_lo[j], a_hi[j])
+
+
+@kernel
+def _negate(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = - slot ``a`` (exact)."""
+    for j in range(w):
+        a_lo = lo[a, j]
+        lo[o, j] = -hi[a, j]
+        hi[o, j] = -a_lo
+
+
+@kernel
+def _div_into(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` / slot ``b`` (``Interval.__truediv__``)."""
+    a_lo, a_hi, b_lo, b_hi = lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w]
+    o_lo, o_hi = lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = _div(a_lo[j], a_hi[j], b_lo[j], b_hi[j])
+
+
+@kernel
+def _det3(
+    lo: Array, hi: Array, m: NDArray[np.int64], o: Slot, t: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = the determinant of the 3 x 3 matrix of slots ``m`` (9, row by
+    row) as ``base._det_chunk`` expands it: the first row's cofactors,
+    alternately subtracted and added. Slots ``t``, ``t + 1`` are scratch."""
+    p, q = t, t + 1
+    slot_mul(lo, hi, m[4], m[8], p, w)
+    slot_mul(lo, hi, m[5], m[7], q, w)
+    slot_sub(lo, hi, p, q, p, w)
+    slot_mul(lo, hi, m[0], p, o, w)
+    slot_mul(lo, hi, m[3], m[8], p, w)
+    slot_mul(lo, hi, m[5], m[6], q, w)
+    slot_sub(lo, hi, p, q, p, w)
+    slot_mul(lo, hi, m[1], p, q, w)
+    slot_sub(lo, hi, o, q, o, w)
+    slot_mul(lo, hi, m[3], m[7], p, w)
+    slot_mul(lo, hi, m[4], m[6], q, w)
+    slot_sub(lo, hi, p, q, p, w)
+    slot_mul(lo, hi, m[2], p, q, w)
+    slot_add(lo, hi, o, q, o, w)
+
+
+# the slots of a chunk: the box (x, y, z) and its centre; the cosine and sine of
+# each leg's angle enclosure (leg k's at + 2 k, + 2 k + 1); the rows of A (leg k's
+# at + 3 k); la cos and la sin of each leg's angle (leg k's at + 2 k, + 2 k + 1);
+# the centres' matrix of _plain_rest; the joints' gradients (leg k's at + 3 k);
+# det A's enclosures and sums; scratch
+_X, _M, _TRIG, _MTRIG, _ROWS, _MROWS, _ARM_TRIG, _MARM_TRIG = 0, 3, 6, 12, 18, 27, 36, 42
+_CENTRES, _GRAD, _NAT, _ALT, _TOT, _RATE, _TERM, _WIDTH, _DEN, _S = (
+    48, 57, 66, 67, 68, 69, 70, 71, 72, 73,
+)  # fmt: skip
+_TEMP = 74  # 6 slots
+_SLOTS = _TEMP + 6
+
+
+@kernel
+def _rows(
+    lo: Array, hi: Array, x: Slot, trig: Slot, legs: Array, rows: Slot, arm_trig: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """The rows of A (``DeltaLeg.a_row_boxes``) into slots ``rows + 3 k``, from the
+    pose in ``x .. x + 2`` and the cosine and sine of leg ``k``'s angle in
+    ``trig + 2 k``, ``+ 1``: ``P + (r - R - la cos) u + la sin e_z``; ``la cos``,
+    ``la sin`` into ``arm_trig + 2 k``, ``+ 1``. Slot ``_TEMP`` is scratch."""
+    h = np.int64(_TEMP)
+    for k in range(3):
+        leg = legs[k]
+        ca, sa, row = arm_trig + 2 * k, arm_trig + 2 * k + 1, rows + 3 * k
+        _mul_c(lo, hi, trig + 2 * k, leg[ARM], leg[ARM], ca, w)
+        _c_sub(lo, hi, leg[OFF_LO], leg[OFF_HI], ca, h, w)
+        _mul_c(lo, hi, h, leg[UX_LO], leg[UX_HI], row, w)
+        slot_add(lo, hi, x, row, row, w)
+        _mul_c(lo, hi, h, leg[UY_LO], leg[UY_HI], row + 1, w)
+        slot_add(lo, hi, x + 1, row + 1, row + 1, w)
+        _mul_c(lo, hi, trig + 2 * k + 1, leg[ARM], leg[ARM], sa, w)
+        slot_add(lo, hi, x + 2, sa, row + 2, w)
+
+
+@kernel
+def _plain_rest(
+    lo: Array,
+    hi: Array,
+    x: Slot,
+    rows: Slot,
+    arm_trig: Slot,
+    legs: Array,
+    o: Slot,
+    w: int,
+) -> None:  # pragma: no cover - compiled
+    """``Delta._det_a_plain`` after the rows (:func:`_rows`) into slot ``o``: the
+    rows' determinant intersected with ``(P - c_1) . ((c_1 - c_2) x (c_1 -
+    c_3))``, ``c_k = (la cos - (r - R)) u_k - la sin e_z`` the sphere centres."""
+    h, t = np.int64(_TEMP), np.int64(_TEMP + 2)
+    nat, alt, cm = np.int64(_NAT), np.int64(_ALT), np.int64(_CENTRES)
+    matrix = np.arange(9, dtype=np.int64)
+    for i in range(9):
+        matrix[i] = rows + i
+    _det3(lo, hi, matrix, nat, t, w)
+    # the centres into the rows of cm (leg k's at + 3 k), in place below
+    for k in range(3):
+        leg = legs[k]
+        c = cm + 3 * k
+        _sub_c(lo, hi, arm_trig + 2 * k, leg[OFF_LO], leg[OFF_HI], h, w)
+        _mul_c(lo, hi, h, leg[UX_LO], leg[UX_HI], c, w)
+        _mul_c(lo, hi, h, leg[UY_LO], leg[UY_HI], c + 1, w)
+        _negate(lo, hi, arm_trig + 2 * k + 1, c + 2, w)
+    # P - c_1, c_1 - c_2, c_1 - c_3 (the first row last: it overwrites c_1)
+    for e in range(3):
+        slot_sub(lo, hi, cm + e, cm + 3 + e, cm + 3 + e, w)
+        slot_sub(lo, hi, cm + e, cm + 6 + e, cm + 6 + e, w)
+        slot_sub(lo, hi, x + e, cm + e, cm + e, w)
+    for i in range(9):
+        matrix[i] = cm + i
+    _det3(lo, hi, matrix, alt, t, w)
+    for j in range(w):
+        lo[o, j] = _max(lo[nat, j], lo[alt, j])
+        hi[o, j] = _min(hi[nat, j], hi[alt, j])
+
+
+@kernel
+def _load(
+    lo: Array,
+    hi: Array,
+    box_lo: Array,
+    box_hi: Array,
+    trig: Array,
+    s: int,
+    w: int,
+    x: Slot,
+    t: Slot,
+) -> None:  # pragma: no cover - compiled
+    """The boxes ``s:s + w``: their coordinates into slots ``x .. x + 2``, the
+    cosines and sines of the legs' angles (``trig`` (4, 3, n): the bounds of the
+    cosines, then of the sines) into slots ``t + 2 k``, ``t + 2 k + 1``."""
+    for j in range(w):
+        for axis in range(3):
+            lo[x + axis, j] = box_lo[s + j, axis]
+            hi[x + axis, j] = box_hi[s + j, axis]
+        for k in range(3):
+            lo[t + 2 * k, j], hi[t + 2 * k, j] = trig[0, k, s + j], trig[1, k, s + j]
+            lo[t + 2 * k + 1, j], hi[t + 2 * k + 1, j] = trig[2, k, s + j], trig[3, k, s + j]
+
+
+@kernel
+def _trig_of(a_lo: Array, a_hi: Array) -> Array:  # pragma: no cover - compiled
+    """``intervals.cos`` and ``sin`` of the angle enclosures ``[a_lo, a_hi]`` (3,
+    n), by ``intervals._trig_bounds``: (4, 3, n), the bounds of the cosines, then
+    of the sines."""
+    n = a_lo.shape[1]
+    out = np.empty((4, 3, n))
+    flat_lo, flat_hi = a_lo.copy().reshape(-1), a_hi.copy().reshape(-1)
+    c_lo, c_hi = _trig_bounds(flat_lo, flat_hi, False, _LIB_REL, _LIB_TINY)
+    s_lo, s_hi = _trig_bounds(flat_lo, flat_hi, True, _LIB_REL, _LIB_TINY)
+    out[0] = c_lo.reshape(3, n)
+    out[1] = c_hi.reshape(3, n)
+    out[2] = s_lo.reshape(3, n)
+    out[3] = s_hi.reshape(3, n)
+    return out
+
+
+@kernel
+def det_a_prepare(
+    lo: Array,
+    hi: Array,
+    a_lo: Array,
+    a_hi: Array,
+    legs: Array,
+    out_lo: Array,
+    out_hi: Array,
+    trig: Array,
+) -> None:  # pragma: no cover - compiled
+    """``Delta._det_a_plain`` of the (n, 3) boxes with the legs' angle enclosures
+    ``[a_lo, a_hi]`` (3, n) into ``out`` (n,), and the cosines and sines of
+    the angles into ``trig`` (4, 3, n; see :func:`_trig_of`). ``legs`` (3,
+    N_CONSTANTS)."""
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_SLOTS, w)), np.empty((_SLOTS, w))
+    x, at, rows = np.int64(_X), np.int64(_TRIG), np.int64(_ROWS)
+    arm_trig, nat = np.int64(_ARM_TRIG), np.int64(_TOT)
+    trig[:] = _trig_of(a_lo, a_hi)
+    n = lo.shape[0]
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        _load(s_lo, s_hi, lo, hi, trig, s, size, x, at)
+        _rows(s_lo, s_hi, x, at, legs, rows, arm_trig, size)
+        _plain_rest(s_lo, s_hi, x, rows, arm_trig, legs, nat, size)
+        out_lo[s : s + size] = s_lo[nat, :size]
+        out_hi[s : s + size] = s_hi[nat, :size]
+
+
+@kernel
+def regular_boxes(
+    lo: Array, hi: Array, legs: Array, regular: NDArray[np.bool_]
+) -> None:  # pragma: no cover - compiled
+    """Into ``regular`` (n,) where every leg is regular over the (n, 3) box
+    (``DeltaLeg._g_boxes``: ``t > 0`` and ``|g| < 1``)."""
+    for j in range(lo.shape[0]):
+        ok = True
+        for k in range(3):
+            g_lo, g_hi, t_lo, _, _ = _g_boxes(
+                lo[j, 0], hi[j, 0], lo[j, 1], hi[j, 1], lo[j, 2], hi[j, 2], legs[k]
+            )
+            ok = ok and (t_lo > 0) and (g_lo > -1.0) and (g_hi < 1.0)
+        regular[j] = ok
+
+
+@kernel
+def centre_args(lo: Array, hi: Array, legs: Array, out: Array) -> None:  # pragma: no cover
+    """``DeltaLeg.branch_boxes`` at the centres ``0.5 lo + 0.5 hi`` of the (n, 3)
+    boxes, up to its library functions, into ``out`` (4, 3, n): for each leg,
+    the clipped arguments whose arccos are alpha's lower and upper bounds, and
+    the centres ``s.mid``, ``w.mid`` of ``s`` and ``w = -z`` (whose arctan2 is
+    the direction of the box's centre)."""
+    for j in range(lo.shape[0]):
+        mx = 0.5 * lo[j, 0] + 0.5 * hi[j, 0]
+        my = 0.5 * lo[j, 1] + 0.5 * hi[j, 1]
+        mz = 0.5 * lo[j, 2] + 0.5 * hi[j, 2]
+        for k in range(3):
+            g_lo, g_hi, _, s_lo, s_hi = _g_boxes(mx, mx, my, my, mz, mz, legs[k])
+            # intervals.arccos: np.clip of each bound to [-1, 1]
+            out[0, k, j] = _min(_max(g_hi, -1.0), 1.0)
+            out[1, k, j] = _min(_max(g_lo, -1.0), 1.0)
+            out[2, k, j] = _clip_mid(s_lo, s_hi)
+            out[3, k, j] = _clip_mid(-mz, -mz)
+
+
+@kernel
+def centre_turn(
+    lo: Array, hi: Array, cs: Array, sn: Array, legs: Array, out: Array
+) -> None:  # pragma: no cover - compiled
+    """``DeltaLeg._direction`` at the centres of the (n, 3) boxes, up to its
+    arctan2 of the corners: ``s``, ``w`` turned by the direction ``(cs, sn)``
+    (3, n), ``us = s cs + w sn`` and ``uw = w cs - s sn``, into ``out`` (4, 3,
+    n): the bounds of ``us``, then of ``uw``."""
+    for j in range(lo.shape[0]):
+        mx = 0.5 * lo[j, 0] + 0.5 * hi[j, 0]
+        my = 0.5 * lo[j, 1] + 0.5 * hi[j, 1]
+        mz = 0.5 * lo[j, 2] + 0.5 * hi[j, 2]
+        for k in range(3):
+            s_lo, s_hi, _, _ = _plane(mx, mx, my, my, legs[k])
+            w_lo, w_hi = -mz, -mz
+            c_k, s_k = cs[k, j], sn[k, j]
+            p_lo, p_hi = interval_mul(s_lo, s_hi, c_k, c_k)
+            q_lo, q_hi = interval_mul(w_lo, w_hi, s_k, s_k)
+            out[0, k, j], out[1, k, j] = interval_add(p_lo, p_hi, q_lo, q_hi)
+            p_lo, p_hi = interval_mul(w_lo, w_hi, c_k, c_k)
+            q_lo, q_hi = interval_mul(s_lo, s_hi, s_k, s_k)
+            out[2, k, j], out[3, k, j] = interval_sub(p_lo, p_hi, q_lo, q_hi)
+
+
+@kernel
+def centre_angles(
+    cs: Array, sn: Array, ref: Array, corners: Array, turned: Array, acos: Array, out: Array
+) -> None:  # pragma: no cover - compiled
+    """``DeltaLeg.branch_boxes`` at the boxes' centres after its library
+    functions, both branches' parts into ``out`` (4, 3, n): the bounds of the
+    direction, then of alpha. From the arctan2 ``ref`` (3, n) of the centres'
+    directions ``(cs, sn)`` (3, n), the arctan2 ``corners`` (4, 3, n) of the
+    corners of the turned box (``turned``, from :func:`centre_turn`: lo lo, lo
+    hi, hi lo, hi hi of ``(uw, us)``) and the arccos ``acos`` (2, 3, n) of
+    alpha's arguments (:func:`centre_args`)."""
+    for k in range(3):
+        for j in range(cs.shape[1]):
+            out[2, k, j] = _max(_lib_down(acos[0, k, j]), 0.0)
+            out[3, k, j] = _min(_lib_up(acos[1, k, j]), _PI_UP)
+            c_k, s_k = cs[k, j], sn[k, j]
+            r_lo, r_hi = _atan_bounds(ref[k, j], ref[k, j], (c_k <= 0) & (s_k <= 0) & (s_k >= 0))
+            c0, c1, c2, c3 = corners[0, k, j], corners[1, k, j], corners[2, k, j], corners[3, k, j]
+            least = _min(_min(_min(c0, c1), c2), c3)
+            most = _max(_max(_max(c0, c1), c2), c3)
+            cut = (turned[0, k, j] <= 0) & (turned[2, k, j] <= 0) & (turned[3, k, j] >= 0)
+            t_lo, t_hi = _atan_bounds(least, most, cut)
+            out[0, k, j], out[1, k, j] = interval_add(r_lo, r_hi, t_lo, t_hi)
+
+
+@kernel
+def centre_trig(centre: Array, out: Array) -> None:  # pragma: no cover - compiled
+    """The cosines and sines of both branches' angles at the boxes' centres
+    (``DeltaLeg.branch_boxes``: the direction plus alpha on branch 0, minus
+    alpha on branch 1, from ``centre`` (4, 3, n) of :func:`centre_angles`)
+    into ``out`` (2, 4, 3, n): branch ``b``'s at ``out[b]`` (see
+    :func:`_trig_of`)."""
+    n = centre.shape[2]
+    m_lo, m_hi = np.empty((3, n)), np.empty((3, n))
+    for branch in range(2):
+        for k in range(3):
+            for j in range(n):
+                d_lo, d_hi = centre[0, k, j], centre[1, k, j]
+                al_lo, al_hi = centre[2, k, j], centre[3, k, j]
+                if branch == 0:
+                    m_lo[k, j], m_hi[k, j] = interval_add(d_lo, d_hi, al_lo, al_hi)
+                else:
+                    m_lo[k, j], m_hi[k, j] = interval_sub(d_lo, d_hi, al_lo, al_hi)
+        out[branch] = _trig_of(m_lo, m_hi)
+
+
+@kernel
+def mean_value_bounds(
+    lo: Array,
+    hi: Array,
+    box_trig: Array,
+    branches: NDArray[np.int64],
+    centre_trig: Array,
+    legs: Array,
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """``Delta.det_a_boxes``' mean-value form over the (n, 3) boxes where every leg
+    is regular, intersected with the enclosures in ``out`` (n,) where its bounds
+    are finite: ``D(m) + sum_j dD/dx_j (x_j - m_j)``.
+
+    ``D(m)`` as ``Delta._det_a_plain`` at the centre ``m``, with the cosines and
+    sines of the angles of each leg's branch (``branches`` (3,)) there
+    (``centre_trig`` (2, 4, 3, n), from :func:`centre_trig`); ``dD/dx_j`` as
+    ``Mechanism.det_a_rate`` (``base._det_rate_span``'s order) with the rows of
+    A over the box (the cosines and sines of the angle enclosures in
+    ``box_trig`` (4, 3, n), see :func:`_trig_of`), their partials
+    (``DeltaLeg.row_partials``) and the joints' gradients
+    (``DeltaLeg.joint_gradient``)."""
+    n = lo.shape[0]
+    # the products of the partials along the pose (the identity) with the
+    # velocity (a unit vector): 1 * 1, and 0 * 1, 1 * 0 or 0 * 0
+    one_lo, one_hi = interval_mul(1.0, 1.0, 1.0, 1.0)
+    zero_lo, zero_hi = interval_mul(0.0, 0.0, 1.0, 1.0)
+
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_SLOTS, w)), np.empty((_SLOTS, w))
+    x, mx, trig, mtrig = np.int64(_X), np.int64(_M), np.int64(_TRIG), np.int64(_MTRIG)
+    rows, mrows = np.int64(_ROWS), np.int64(_MROWS)
+    arm_trig, marm_trig, grad = np.int64(_ARM_TRIG), np.int64(_MARM_TRIG), np.int64(_GRAD)
+    tot, rate, term, width = np.int64(_TOT), np.int64(_RATE), np.int64(_TERM), np.int64(_WIDTH)
+    den, sp, t = np.int64(_DEN), np.int64(_S), np.int64(_TEMP)
+    moved = np.int64(_TEMP + 2)  # 3 slots
+    matrix = np.empty(9, dtype=np.int64)
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        _load(s_lo, s_hi, lo, hi, box_trig, s, size, x, trig)
+        for j in range(size):
+            for axis in range(3):
+                m = 0.5 * lo[s + j, axis] + 0.5 * hi[s + j, axis]
+                s_lo[mx + axis, j] = m
+                s_hi[mx + axis, j] = m
+            for k in range(3):
+                b = branches[k]
+                s_lo[mtrig + 2 * k, j] = centre_trig[b, 0, k, s + j]
+                s_hi[mtrig + 2 * k, j] = centre_trig[b, 1, k, s + j]
+                s_lo[mtrig + 2 * k + 1, j] = centre_trig[b, 2, k, s + j]
+                s_hi[mtrig + 2 * k + 1, j] = centre_trig[b, 3, k, s + j]
+        # D(m)
+        _rows(s_lo, s_hi, mx, mtrig, legs, mrows, marm_trig, size)
+        _plain_rest(s_lo, s_hi, mx, mrows, marm_trig, legs, tot, size)
+        # the rows over the box, the joints' gradients -row / (la (s sin + z cos))
+        _rows(s_lo, s_hi, x, trig, legs, rows, arm_trig, size)
+        for k in range(3):
+            leg = legs[k]
+            # s = x u_x + y u_y + (r - R), as _plane
+            _mul_c(s_lo, s_hi, x, leg[UX_LO], leg[UX_HI], t, size)
+            _mul_c(s_lo, s_hi, x + 1, leg[UY_LO], leg[UY_HI], t + 1, size)
+            slot_add(s_lo, s_hi, t, t + 1, sp, size)
+            _add_c(s_lo, s_hi, sp, leg[OFF_LO], leg[OFF_HI], sp, size)
+            slot_mul(s_lo, s_hi, sp, trig + 2 * k + 1, t, size)
+            slot_mul(s_lo, s_hi, x + 2, trig + 2 * k, t + 1, size)
+            slot_add(s_lo, s_hi, t, t + 1, den, size)
+            _mul_c(s_lo, s_hi, den, leg[ARM], leg[ARM], den, size)
+            for e in range(3):
+                _div_into(s_lo, s_hi, rows + 3 * k + e, den, grad + 3 * k + e, size)
+                _negate(s_lo, s_hi, grad + 3 * k + e, grad + 3 * k + e, size)
+        for axis in range(3):
+            for i in range(3):
+                leg = legs[i]
+                # row i moved: d row / dq * rate + sum_ax d row / dx_ax * v_ax, with
+                # d row / dq = (la sin u_x, la sin u_y, la cos)
+                for j in range(3):
+                    if j < 2:
+                        _mul_c(
+                            s_lo, s_hi, arm_trig + 2 * i + 1,
+                            leg[UX_LO] if j == 0 else leg[UY_LO],
+                            leg[UX_HI] if j == 0 else leg[UY_HI],
+                            moved + j, size,
+                        )  # fmt: skip
+                        slot_mul(s_lo, s_hi, moved + j, grad + 3 * i + axis, moved + j, size)
+                    else:
+                        slot_mul(s_lo, s_hi, arm_trig + 2 * i, grad + 3 * i + axis, moved + j, size)
+                    for ax in range(3):
+                        unit = j == ax and ax == axis
+                        _add_c(
+                            s_lo, s_hi, moved + j,
+                            one_lo if unit else zero_lo, one_hi if unit else zero_hi,
+                            moved + j, size,
+                        )  # fmt: skip
+                for r in range(9):
+                    matrix[r] = rows + r
+                for j in range(3):
+                    matrix[3 * i + j] = moved + j
+                if i == 0:
+                    _det3(s_lo, s_hi, matrix, rate, t, size)
+                else:
+                    _det3(s_lo, s_hi, matrix, term, t, size)
+                    slot_add(s_lo, s_hi, rate, term, rate, size)
+            slot_sub(s_lo, s_hi, x + axis, mx + axis, width, size)
+            slot_mul(s_lo, s_hi, rate, width, term, size)
+            slot_add(s_lo, s_hi, tot, term, tot, size)
+        for j in range(size):
+            t_lo, t_hi = s_lo[tot, j], s_hi[tot, j]
+            if np.isfinite(t_lo) and np.isfinite(t_hi):
+                out_lo[s + j] = _max(out_lo[s + j], t_lo)
+                out_hi[s + j] = _min(out_hi[s + j], t_hi)

@@ -1,0 +1,179 @@
+"""The Delta's compiled enclosures (mechanisms/_delta_kernels.py) against the
+:class:`~moveability.intervals.Interval` code they replace, kept as the
+reference (``Delta._det_a_boxes_intervals``).
+
+The kernels repeat the Interval operations' steps box by box, so their bounds
+must be the same floats, bit for bit (``np.array_equal``, NaN at the same
+places): det A without a posture (the stacked rows and the centres' form) and
+with each posture (the mean-value form along the sheet where every leg is
+regular). The boxes are of every kind: the whole workspace box, points, thin
+(one or two axes of no width), wide and narrow, about a leg's fold surfaces
+(``|g| = 1``) and about its axis (``t = 0``, where the direction is singular),
+across the cut of arctan2 (the in-plane ``s < 0`` with ``z`` straddling 0), on
+signed zeros, far out of reach and huge (overflowing squares). The angle
+enclosures are the legs' own (as the sheets take them: a branch's where the
+leg is regular, else the hull), random, points, wider than a turn, infinite
+and NaN. The designs include the example's, a rod as long as the arm, a
+platform wider than the base and a short rod. (test_delta_hostile.py checks
+that the enclosures hold det A at sampled configurations.)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from moveability.intervals import Interval
+from moveability.mechanisms.base import REGULAR
+from moveability.mechanisms.delta import Delta
+
+DESIGNS = {
+    "example": Delta(0.2, 0.05, 0.35, 0.8),
+    "default": Delta(10.0, 4.0, 8.0, 15.0),
+    # la = lb: la^2 - lb^2 = 0, g's minimum in t on the axis
+    "arm-as-rod": Delta(10.0, 4.0, 12.0, 12.0),
+    # r > R (the offset positive) and a rod shorter than the arm
+    "wide-platform": Delta(3.0, 5.0, 9.0, 7.0),
+}
+
+
+def _same(a: Interval, b: Interval) -> None:
+    """The two enclosures are the same floats (NaN at the same places)."""
+    assert np.array_equal(a.lo, b.lo, equal_nan=True)
+    assert np.array_equal(a.hi, b.hi, equal_nan=True)
+
+
+def _g(m: Delta, leg: int, p: np.ndarray) -> np.ndarray:
+    """``g`` of a leg at poses (floats)."""
+    s, d, z = m.delta_legs[leg]._plane(p)
+    la, lb = m.arm, m.rod
+    with np.errstate(all="ignore"):
+        return (s * s + z * z + d * d + la * la - lb * lb) / (2 * la * np.hypot(s, z))
+
+
+def _boxes(m: Delta, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` boxes of every kind, in random order."""
+    rng = np.random.default_rng(seed)
+    blo, bhi = m.bounds
+    span = bhi - blo
+    kinds = rng.integers(0, 12, n)
+    centre = blo + rng.random((n, 3)) * span
+    width = span * 10.0 ** rng.uniform(-12, 0, (n, 3))
+    # mostly narrow boxes: most are regular for every leg, as in a deep tree
+    narrow = kinds >= 9
+    width[narrow] = span * 10.0 ** rng.uniform(-4, -2, (int(narrow.sum()), 1))
+    width[kinds == 0] = span  # the whole box
+    width[kinds == 1] = 0.0  # points
+    thin = np.flatnonzero(kinds == 2)
+    width[thin, rng.integers(0, 3, thin.size)] = 0.0
+    width[thin[::2], rng.integers(0, 3, thin[::2].size)] = 0.0
+    # about a leg's fold surface: bisect g - 1 (or g + 1) on a segment from the
+    # box's centre outwards
+    for j in np.flatnonzero(kinds == 3):
+        leg = int(rng.integers(0, 3))
+        a, b = centre[j].copy(), centre[j] + rng.normal(size=3) * span
+        ga, gb = abs(_g(m, leg, a[None])[0]), abs(_g(m, leg, b[None])[0])
+        if (ga < 1) != (gb < 1):
+            for _ in range(60):
+                c = 0.5 * (a + b)
+                if (abs(_g(m, leg, c[None])[0]) < 1) == (ga < 1):
+                    a = c
+                else:
+                    b = c
+            centre[j] = a
+        width[j] *= 1e-3
+    # about a leg's axis: s = 0 and z = 0
+    for j in np.flatnonzero(kinds == 4):
+        leg = m.delta_legs[int(rng.integers(0, 3))]
+        ux, uy = leg.unit
+        radial = m.base_radius - m.platform_radius
+        along = rng.uniform(-1, 1) * span[0]
+        centre[j] = [radial * ux - along * uy, radial * uy + along * ux, 0.0]
+        width[j] *= 1e-2
+    lo, hi = centre - width / 2, centre + width / 2
+    # across the cut of arctan2: s < 0, z straddling 0
+    for j in np.flatnonzero(kinds == 5):
+        leg = m.delta_legs[int(rng.integers(0, 3))]
+        ux, uy = leg.unit
+        radial = m.base_radius - m.platform_radius - rng.uniform(0.1, 1.0) * span[0]
+        c = np.array([radial * ux, radial * uy, 0.0])
+        lo[j], hi[j] = c - width[j] / 2, c + width[j] / 2
+        lo[j, 2], hi[j, 2] = -rng.uniform(0, 1), rng.choice([0.0, rng.uniform(0, 1)])
+    # on signed zeros
+    zeros = np.flatnonzero(kinds == 6)
+    axis = rng.integers(0, 3, zeros.size)
+    lo[zeros, axis] = -0.0
+    hi[zeros, axis] = np.maximum(hi[zeros, axis], 0.0)
+    # far out of reach, and huge
+    far = kinds == 7
+    lo[far] = centre[far] * 1e3
+    hi[far] = lo[far] + width[far]
+    huge = np.flatnonzero(kinds == 8)
+    lo[huge] = -(10.0 ** rng.uniform(150, 308, (huge.size, 3)))
+    hi[huge] = 10.0 ** rng.uniform(150, 308, (huge.size, 3))
+    return lo, hi
+
+
+def _angles(m: Delta, lo: np.ndarray, hi: np.ndarray, posture: int, seed: int) -> list[Interval]:
+    """Angle enclosures of every kind for the legs of ``posture``: as the sheets
+    take them (a branch's where the leg is regular, else the hull), random,
+    points, wider than a turn, infinite and NaN."""
+    rng = np.random.default_rng(seed)
+    n = lo.shape[0]
+    out = []
+    for i, leg in enumerate(m.delta_legs):
+        reach = leg.reach(lo, hi)
+        branch = reach.branches[int(m.postures[posture][i])]
+        regular = reach.status == REGULAR
+        a_lo = np.where(regular, branch.lo, reach.hull.lo)
+        a_hi = np.where(regular, branch.hi, reach.hull.hi)
+        kinds = rng.integers(0, 12, n)  # mostly the legs' own
+        t = rng.uniform(-4, 4, n)
+        width = 10.0 ** rng.uniform(-12, 0.5, n)
+        pick = kinds == 0
+        a_lo[pick], a_hi[pick] = t[pick] - width[pick] / 2, t[pick] + width[pick] / 2
+        pick = kinds == 1
+        a_lo[pick], a_hi[pick] = t[pick], t[pick]
+        pick = kinds == 2
+        a_lo[pick], a_hi[pick] = t[pick] - 4, t[pick] + 4
+        odd = np.flatnonzero(kinds == 3)
+        a_lo[odd] = rng.choice([-np.inf, np.nan, 0.0, -0.0], odd.size)
+        a_hi[odd] = rng.choice([np.inf, np.nan, np.pi, 0.0], odd.size)
+        out.append(Interval(a_lo, a_hi))
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(DESIGNS))
+def test_det_a_boxes_bit_for_bit(name: str) -> None:
+    m = DESIGNS[name]
+    lo, hi = _boxes(m, 700, seed=len(name))
+    regular_boxes = 0
+    for posture in range(m.postures.shape[0]):
+        angles = _angles(m, lo, hi, posture, seed=posture)
+        _same(m.det_a_boxes(lo, hi, angles), m._det_a_boxes_intervals(lo, hi, angles))
+        got = m.det_a_boxes(lo, hi, angles, posture=posture)
+        want = m._det_a_boxes_intervals(lo, hi, angles, posture=posture)
+        _same(got, want)
+        plain = m._det_a_boxes_intervals(lo, hi, angles)
+        regular_boxes += int(((got.lo != plain.lo) | (got.hi != plain.hi)).sum())
+    # the mean-value form narrowed many enclosures: its path ran and counted
+    assert regular_boxes > 100
+
+
+def test_det_a_boxes_of_few_boxes_and_other_shapes() -> None:
+    m = DESIGNS["example"]
+    lo, hi = _boxes(m, 40, seed=3)
+    angles = _angles(m, lo, hi, 5, seed=4)
+    for k in (0, 1, 2, 17):
+        sub = [Interval(a.lo[:k], a.hi[:k]) for a in angles]
+        _same(
+            m.det_a_boxes(lo[:k], hi[:k], sub, posture=5),
+            m._det_a_boxes_intervals(lo[:k], hi[:k], sub, posture=5),
+        )
+    # one enclosure for every box (broadcast views), and boxes in Fortran order
+    n = lo.shape[0]
+    one = [Interval(np.broadcast_to(0.3, (n,)), np.broadcast_to(0.4, (n,)))] * 3
+    _same(
+        m.det_a_boxes(np.asfortranarray(lo), np.asfortranarray(hi), one, posture=2),
+        m._det_a_boxes_intervals(lo, hi, one, posture=2),
+    )
