@@ -589,18 +589,37 @@ def _chain_search(
     two seeds is no step of a chain, and is left out of the search."""
     n = through.size
     degree = np.zeros(n + 1, dtype=np.int64)
+    # one pass over the pairs: those of two leaves `through`, in order (grown by
+    # doubling), and each leaf's count of them
+    cap = max(1024, n)
+    got_a = np.empty(cap, dtype=np.int64)
+    got_b = np.empty(cap, dtype=np.int64)
+    n_got = 0
     m = 0
     n_seed_meets = 0
     for t in range(pairs.shape[0]):
         i, j = pairs[t, 0], pairs[t, 1]
-        if through[i] and through[j]:
-            if source[i] >= 0 and source[j] >= 0:
-                if source[i] != source[j]:
-                    n_seed_meets += 1
+        if not (through[i] and through[j]):
+            continue
+        if source[i] >= 0 and source[j] >= 0:
+            if source[i] == source[j]:
                 continue
+            n_seed_meets += 1
+        else:
             degree[i + 1] += 1
             degree[j + 1] += 1
             m += 1
+        if n_got == cap:
+            cap *= 2
+            grown = np.empty(cap, dtype=np.int64)
+            grown[:n_got] = got_a[:n_got]
+            got_a = grown
+            grown = np.empty(cap, dtype=np.int64)
+            grown[:n_got] = got_b[:n_got]
+            got_b = grown
+        got_a[n_got] = i
+        got_b[n_got] = j
+        n_got += 1
     for i in range(n):
         degree[i + 1] += degree[i]
     fill = degree[:-1].copy()
@@ -611,20 +630,18 @@ def _chain_search(
     b = np.empty(n_seed_meets + m, dtype=np.int64)
     s = 0
     k = n_seed_meets
-    for t in range(pairs.shape[0]):
-        i, j = pairs[t, 0], pairs[t, 1]
-        if through[i] and through[j]:
-            if source[i] >= 0 and source[j] >= 0:
-                if source[i] != source[j]:
-                    a[s], b[s] = i, j
-                    s += 1
-                continue
-            a[k], b[k] = i, j
-            k += 1
-            neighbour[fill[i]] = j
-            fill[i] += 1
-            neighbour[fill[j]] = i
-            fill[j] += 1
+    for t in range(n_got):
+        i, j = got_a[t], got_b[t]
+        if source[i] >= 0 and source[j] >= 0:
+            a[s], b[s] = i, j
+            s += 1
+            continue
+        a[k], b[k] = i, j
+        k += 1
+        neighbour[fill[i]] = j
+        fill[i] += 1
+        neighbour[fill[j]] = i
+        fill[j] += 1
     hops = np.full(n, np.inf)
     pred = np.full(n, -1, dtype=np.int64)
     label = np.full(n, -1, dtype=np.int64)
