@@ -329,3 +329,44 @@ def test_leaf_table_from_the_build_by_level_or_by_location(monkeypatch):
     assert any(len(c) > 1 for c, _, _ in kept)
     for f in fields(fast):
         np.testing.assert_array_equal(getattr(fast, f.name), getattr(located, f.name), f.name)
+
+
+def test_leaf_volumes_by_level_are_those_of_each_leaf():
+    """The leaves' volumes computed once per level are, bit for bit, those computed
+    leaf by leaf, on a tree of leaves of many levels and unequal axes."""
+    from moveability import BOUNDARY, IN, OUT, HyperTree
+    from moveability.analysis.result import _leaf_volumes
+    from moveability.hypertree.measurement import leaf_volumes
+
+    rng = np.random.default_rng(5)
+
+    def mixed(lo, hi):
+        return rng.choice(np.array([IN, OUT, BOUNDARY], dtype=np.uint8), size=len(lo))
+
+    tree = HyperTree.build(
+        [-1.3, 0.1, 0.0], [2.9, 0.7, 6.283185307179586], mixed, max_depth=[5, 3, 6], merge=False
+    )
+    assert len(np.unique(tree.levels)) > 2
+    np.testing.assert_array_equal(_leaf_volumes(tree), leaf_volumes(tree))
+
+
+def test_pieces_written_in_place_are_the_joint_pieces():
+    """The pieces of the region graph written into its arrays are those of
+    joint_pieces, for free, prismatic and limited revolute joints."""
+    from moveability.analysis.regions import _pieces_into, joint_pieces
+
+    rng = np.random.default_rng(8)
+    lo = rng.uniform(-10, 30, (200, 2))
+    hi = lo + rng.uniform(0, 8, lo.shape)
+    lo[0, 0], hi[1, 1] = np.nan, np.inf
+    for limit in (
+        JointLimit.unlimited(),
+        JointLimit(lo=10.0, hi=25.0, periodic=False, prismatic=True),
+        JointLimit(lo=-1.0, hi=2.5, periodic=False, prismatic=False),
+    ):
+        out_lo, out_hi = np.empty((2, *lo.shape)), np.empty((2, *lo.shape))
+        ok = _pieces_into(lo, hi, limit, out_lo, out_hi)
+        want_lo, want_hi, want_ok = joint_pieces(lo, hi, limit)
+        np.testing.assert_array_equal(out_lo, want_lo)
+        np.testing.assert_array_equal(out_hi, want_hi)
+        np.testing.assert_array_equal(ok, want_ok)

@@ -56,9 +56,13 @@ def test_chain_search_against_scipy_distances(seed):
         else:
             assert pred[w] == -1 and label[w] == -1
 
-    # the meeting pairs: the searched pairs whose leaves have two labels, in order
-    expected = [
+    # the meeting pairs: the searched pairs whose leaves have two labels, those of
+    # two seeds first, then the others, each in order
+    meeting = [
         (i, j) for i, j in pairs[use] if label[i] >= 0 and label[j] >= 0 and label[i] != label[j]
+    ]
+    expected = [(i, j) for i, j in meeting if source[i] >= 0 and source[j] >= 0] + [
+        (i, j) for i, j in meeting if not (source[i] >= 0 and source[j] >= 0)
     ]
     assert [(int(i), int(j)) for i, j in zip(a, b, strict=True)] == [
         (int(i), int(j)) for i, j in expected

@@ -988,3 +988,52 @@ def test_hypothesis_deep_trees_match_brute_force(k, data, seed, merge):
     inside = points[ref_index >= 0][:, kept]
     got, _ = locate(project(tree, kept), inside)
     np.testing.assert_array_equal(got, brute_project_at(tree, kept, inside))
+
+
+@pytest.mark.parametrize("max_depth", [(4, 4), (3, 3, 3), (2, 4, 1), (0, 3, 2), (2, 2, 2, 2)])
+def test_touching_matches_two_adjacencies(max_depth):
+    """The vertex and face pairs from one search equal the two adjacencies computed
+    apart, on a tree and on its refinements (pairs reused, as the resolution of an
+    analysis does), whatever the statuses and periodic axes (axes of depth 0 too)."""
+    from moveability.hypertree.topology import refined_touching, touching
+
+    rng = np.random.default_rng([len(max_depth), *max_depth, 29])
+    k = len(max_depth)
+    fewer = False
+    for trial in range(4):
+        periodic = tuple(a for a in range(k) if rng.random() < 0.5)
+        stop = int(rng.integers(1, max(max_depth)))
+        tree = HyperTree.build(
+            np.zeros(k),
+            np.exp2(np.asarray(max_depth, dtype=float)),
+            random_classifier(rng, 0.6, True),
+            max_depth=list(max_depth),
+            periodic=periodic,
+            merge=False,
+            stop_level=stop,
+        )
+        status = [None, IN | BOUNDARY][trial % 2]
+
+        def apart(t: HyperTree, status: int | None = status) -> tuple[np.ndarray, np.ndarray]:
+            return (
+                adjacency(t, status=status, connectivity=k),
+                adjacency(t, status=status, connectivity=1),
+            )
+
+        vertex, face = touching(tree, status=status)
+        for got, want in zip((vertex, face), apart(tree), strict=True):
+            np.testing.assert_array_equal(got, want, err_msg=f"{periodic}")
+        fewer |= len(face) < len(vertex)
+        for _ in range(3):
+            mask = (tree.levels < tree.layout.n_levels) & (rng.random(len(tree)) < 0.3)
+            finer = tree.refine(mask, random_classifier(rng, 0.6, True))
+            is_child = ~np.isin(finer.keys, tree.keys[~mask])
+            old_index = np.full(len(finer), -1)
+            old_index[~is_child] = np.flatnonzero(~mask)
+            vertex, face = refined_touching(finer, tree, vertex, face, old_index, status=status)
+            for got, want in zip((vertex, face), apart(finer), strict=True):
+                np.testing.assert_array_equal(got, want, err_msg=f"{periodic}")
+            fewer |= len(face) < len(vertex)
+            tree = finer
+    # some leaves touch by a corner alone: the face pairs were picked out
+    assert fewer

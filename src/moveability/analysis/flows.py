@@ -149,8 +149,10 @@ def _face_sides(
     m = pairs.shape[0]
     k = anchors.shape[1]
     # per pair, bit d: b lies across a's side d (as given); reversed, the sides of
-    # each axis swap. One pass over the leaves' cells, then two over the bits.
+    # each axis swap. One pass over the leaves' cells, counting each side's
+    # pairs, then one over the bits.
     sides = np.zeros(m, dtype=np.int64)
+    count = np.zeros(2 * k, dtype=np.int64)
     for e in range(m):
         a = pairs[e, 0]
         b = pairs[e, 1]
@@ -167,30 +169,27 @@ def _face_sides(
             if anchors[a, axis] == end_b:
                 bits |= 1 << (2 * axis + 1)
         sides[e] = bits
-    count = np.zeros(2 * k, dtype=np.int64)
+        for d in range(2 * k):
+            # reversed, side 2 axis and 2 axis + 1 trade places
+            count[d] += ((bits >> d) & 1) + ((bits >> (d ^ 1)) & 1)
     ptr = np.zeros(2 * k + 1, dtype=np.int64)
-    flat = np.empty((0, 2), dtype=np.int64)
-    for step in range(2):
-        if step == 1:
+    for d in range(2 * k):
+        ptr[d + 1] = ptr[d] + count[d]
+    flat = np.empty((ptr[2 * k], 2), dtype=np.int64)
+    count[:] = 0
+    for half in range(2):
+        for e in range(m):
+            bits = sides[e]
+            if not bits:
+                continue
+            a = pairs[e, half]
+            b = pairs[e, 1 - half]
             for d in range(2 * k):
-                ptr[d + 1] = ptr[d] + count[d]
-            flat = np.empty((ptr[2 * k], 2), dtype=np.int64)
-            count[:] = 0
-        for half in range(2):
-            for e in range(m):
-                bits = sides[e]
-                if not bits:
+                if not (bits >> (d ^ half)) & 1:
                     continue
-                a = pairs[e, half]
-                b = pairs[e, 1 - half]
-                for d in range(2 * k):
-                    # reversed, side 2 axis and 2 axis + 1 trade places
-                    if not (bits >> (d ^ half)) & 1:
-                        continue
-                    if step == 1:
-                        flat[ptr[d] + count[d], 0] = a
-                        flat[ptr[d] + count[d], 1] = b
-                    count[d] += 1
+                flat[ptr[d] + count[d], 0] = a
+                flat[ptr[d] + count[d], 1] = b
+                count[d] += 1
     return flat, ptr
 
 
@@ -867,54 +866,76 @@ def _dependencies(
     never = np.zeros((n_faces, m), dtype=np.bool_)
     dep_ptr = np.zeros(m * slots + 1, dtype=np.int64)
     fill = np.zeros(m * slots, dtype=np.int64)
-    dep_row = np.empty(0, dtype=np.int64)
-    dep_slot = np.empty(0, dtype=np.int64)
-    dep_face = np.empty(0, dtype=np.int64)
-    for step in range(2):
-        if step == 1:
-            for sub in range(m * slots):
-                dep_ptr[sub + 1] = dep_ptr[sub] + fill[sub]
-                fill[sub] = 0
-            total = dep_ptr[m * slots]
-            dep_row = np.empty(total, dtype=np.int64)
-            dep_slot = np.empty(total, dtype=np.int64)
-            dep_face = np.empty(total, dtype=np.int64)
-        for f in range(n_faces):
-            for e in range(face_ptr[f], face_ptr[f + 1]):
-                a, b = pairs[e, 0], pairs[e, 1]
-                for p in range(n_post):
-                    ra, rb = node_row[a, p], node_row[b, p]
-                    if ra < 0 or done[b, p]:
+    # one pass over the pairs: the triples in the order met, each with the slot
+    # across it waits on; then placed by that slot (a counting sort, stable)
+    cap = max(1024, pairs.shape[0] // 4)
+    got_row = np.empty(cap, dtype=np.int64)
+    got_slot = np.empty(cap, dtype=np.int64)
+    got_face = np.empty(cap, dtype=np.int64)
+    got_sub = np.empty(cap, dtype=np.int64)
+    total = 0
+    for f in range(n_faces):
+        for e in range(face_ptr[f], face_ptr[f + 1]):
+            a, b = pairs[e, 0], pairs[e, 1]
+            for p in range(n_post):
+                ra, rb = node_row[a, p], node_row[b, p]
+                if ra < 0 or done[b, p]:
+                    continue
+                if rb < 0:
+                    # a node across that is neither done nor listed never attaches
+                    never[f, ra] = True
+                    continue
+                for ca in range(slots):
+                    if slot_done[ra, ca]:
                         continue
-                    if rb < 0:
-                        # a node across that is neither done nor listed never attaches
-                        never[f, ra] = True
-                        continue
-                    for ca in range(slots):
-                        if slot_done[ra, ca]:
+                    for cb in range(slots):
+                        if slot_done[rb, cb]:
                             continue
-                        for cb in range(slots):
-                            if slot_done[rb, cb]:
-                                continue
-                            # their joint ranges meet
-                            meet = True
-                            for j in range(n_legs):
-                                if not (
-                                    spans[ra, ca, j, 0] <= spans[rb, cb, j, 1] + _SPAN_TOL
-                                    and spans[rb, cb, j, 0] <= spans[ra, ca, j, 1] + _SPAN_TOL
-                                ):
-                                    meet = False
-                            if not meet:
-                                continue
-                            sub = rb * slots + cb
-                            if step == 0:
-                                per_face[f, ra, ca] += 1
-                            else:
-                                at = dep_ptr[sub] + fill[sub]
-                                dep_row[at] = ra
-                                dep_slot[at] = ca
-                                dep_face[at] = f
-                            fill[sub] += 1
+                        # their joint ranges meet
+                        meet = True
+                        for j in range(n_legs):
+                            if not (
+                                spans[ra, ca, j, 0] <= spans[rb, cb, j, 1] + _SPAN_TOL
+                                and spans[rb, cb, j, 0] <= spans[ra, ca, j, 1] + _SPAN_TOL
+                            ):
+                                meet = False
+                        if not meet:
+                            continue
+                        sub = rb * slots + cb
+                        per_face[f, ra, ca] += 1
+                        fill[sub] += 1
+                        if total == cap:
+                            cap *= 2
+                            grown = np.empty(cap, dtype=np.int64)
+                            grown[:total] = got_row[:total]
+                            got_row = grown
+                            grown = np.empty(cap, dtype=np.int64)
+                            grown[:total] = got_slot[:total]
+                            got_slot = grown
+                            grown = np.empty(cap, dtype=np.int64)
+                            grown[:total] = got_face[:total]
+                            got_face = grown
+                            grown = np.empty(cap, dtype=np.int64)
+                            grown[:total] = got_sub[:total]
+                            got_sub = grown
+                        got_row[total] = ra
+                        got_slot[total] = ca
+                        got_face[total] = f
+                        got_sub[total] = sub
+                        total += 1
+    for sub in range(m * slots):
+        dep_ptr[sub + 1] = dep_ptr[sub] + fill[sub]
+        fill[sub] = 0
+    dep_row = np.empty(total, dtype=np.int64)
+    dep_slot = np.empty(total, dtype=np.int64)
+    dep_face = np.empty(total, dtype=np.int64)
+    for t in range(total):
+        sub = got_sub[t]
+        at = dep_ptr[sub] + fill[sub]
+        dep_row[at] = got_row[t]
+        dep_slot[at] = got_slot[t]
+        dep_face[at] = got_face[t]
+        fill[sub] += 1
     for f in range(n_faces):
         for r in range(m):
             # a face on the edge of the box can never be crossed

@@ -95,15 +95,15 @@ def _certain_edges(
     use_contact: bool,
     pq: NDArray[np.int64],
     same_leaf: NDArray[np.bool_],
-    out: NDArray[np.int64],
-    fill: bool,
-) -> int:  # pragma: no cover - compiled
-    """The certain graph's edges (node = leaf * P + posture), counted, or written
-    into ``out`` with ``fill``: per posture, the touching pairs whose sheets have
-    one sign and are a regular IN sheet and a certified one (or two fold group
-    members with a reachable contact); then, per pair of postures, the leaves
-    where both are members of one fold group of one sign."""
+) -> NDArray[np.int64]:  # pragma: no cover - compiled
+    """The certain graph's edges (node = leaf * P + posture), (m, 2): per posture,
+    the touching pairs whose sheets have one sign and are a regular IN sheet
+    and a certified one (or two fold group members with a reachable contact);
+    then, per pair of postures, the leaves where both are members of one fold
+    group of one sign. One pass, into an array as long as they may be (its
+    pages beyond the edges written are never touched)."""
     n, n_post = sign.shape
+    out = np.empty((pairs.shape[0] * n_post + pq.shape[0] * n, 2), dtype=np.int64)
     k = 0
     for p in range(n_post):
         for t in range(pairs.shape[0]):
@@ -114,19 +114,17 @@ def _certain_edges(
             if not ok and use_contact:
                 ok = group[i, p] and group[j, p] and contact[t]
             if ok:
-                if fill:
-                    out[k, 0] = i * n_post + p
-                    out[k, 1] = j * n_post + p
+                out[k, 0] = i * n_post + p
+                out[k, 1] = j * n_post + p
                 k += 1
     for g in range(pq.shape[0]):
         p, q = pq[g, 0], pq[g, 1]
         for i in range(n):
             if group[i, p] and group[i, q] and same_leaf[g, i] and sign[i, p] == sign[i, q]:
-                if fill:
-                    out[k, 0] = i * n_post + p
-                    out[k, 1] = i * n_post + q
+                out[k, 0] = i * n_post + p
+                out[k, 1] = i * n_post + q
                 k += 1
-    return k
+    return out[:k]
 
 
 @kernel
@@ -251,6 +249,33 @@ def joint_pieces(
     return np.stack([lo0, lo1]), np.stack([hi0, hi1]), np.stack([ok0, ok1])
 
 
+def _pieces_into(
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+    limit: JointLimit,
+    out_lo: NDArray[np.float64],
+    out_hi: NDArray[np.float64],
+) -> NDArray[np.bool_]:
+    """:func:`joint_pieces`, its bounds written into ``out_lo`` and ``out_hi`` (2, ...):
+    the same numbers, with no arrays in between for free and prismatic joints."""
+    if limit.periodic:
+        out_lo[...] = -np.inf
+        out_hi[...] = np.inf
+        full = np.ones((2, *lo.shape), dtype=bool)
+        full[1] = False
+        return full
+    if limit.prismatic:
+        one = np.zeros((2, *lo.shape), dtype=bool)
+        one[0] = (lo <= limit.hi + _TOL) & (hi >= limit.lo - _TOL)
+        np.maximum(lo, limit.lo, out=out_lo[0])
+        out_lo[1] = limit.lo
+        np.minimum(hi, limit.hi, out=out_hi[0])
+        out_hi[1] = limit.lo
+        return one
+    out_lo[...], out_hi[...], ok = joint_pieces(lo, hi, limit)
+    return ok
+
+
 def split_legs(limits: tuple[JointLimit, ...]) -> list[int]:
     """Legs whose joint range has two pieces: the limited revolute joints.
 
@@ -305,9 +330,7 @@ def region_graph(
         np.ascontiguousarray(certified), np.ascontiguousarray(group), contact,
         reachable_contact is not None, pq, same_leaf,
     )  # fmt: skip
-    n_edges = _certain_edges(*args, np.zeros((0, 2), dtype=np.int64), False)
-    certain_edges = np.empty((n_edges, 2), dtype=np.int64)
-    _certain_edges(*args, certain_edges, True)
+    certain_edges = _certain_edges(*args)
     certain, n_certain = edge_labels(
         n * n_post, certain_edges[:, 0], certain_edges[:, 1], certified.ravel()
     )
@@ -333,10 +356,12 @@ def region_graph(
     piece_hi = np.empty((n_legs, 2, n, n_post))
     piece_ok = []
     for i in range(n_legs):
-        piece_lo[i], piece_hi[i], ok = joint_pieces(
-            table.angles_lo[:, :, i], table.angles_hi[:, :, i], limits[i]
-        )
-        piece_ok.append(ok)
+        piece_ok.append(
+            _pieces_into(
+                table.angles_lo[:, :, i], table.angles_hi[:, :, i], limits[i], piece_lo[i],
+                piece_hi[i],
+            )
+        )  # fmt: skip
 
     # has[p][c]: the node of posture p has sub-node c (a piece for every leg)
     has = np.ones((n_post, slots, n), dtype=bool)

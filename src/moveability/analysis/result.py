@@ -19,9 +19,9 @@ from numpy.typing import ArrayLike, NDArray
 from ..compiled import kernel
 from ..errors import InvalidParameterError, ResolutionError
 from ..hypertree.keys import MAX_KEY_BITS
-from ..hypertree.measurement import leaf_volumes, locate
+from ..hypertree.measurement import locate
 from ..hypertree.status import BOUNDARY, IN, OUT
-from ..hypertree.topology import adjacency, refined_adjacency
+from ..hypertree.topology import refined_touching, touching
 from ..hypertree.tree import HyperTree
 from ..intervals import Interval
 from ..limits import INSIDE
@@ -465,21 +465,27 @@ def _leaf_table(
     return stack_tables(tables).take(source)
 
 
+def _leaf_volumes(tree: HyperTree) -> NDArray[np.float64]:
+    """:func:`~moveability.hypertree.measurement.leaf_volumes`, computed once per
+    level: a leaf's widths, and so its volume, are those of its level (the same
+    expression on the same numbers, so the same floats)."""
+    levels = np.arange(int(tree.levels.max(initial=0)) + 1)
+    widths = (tree.hi - tree.lo)[None, :] / np.exp2(tree.layout.axis_depths(levels))
+    per_level: NDArray[np.float64] = np.prod(widths, axis=1)
+    return np.asarray(per_level[tree.levels], dtype=np.float64)
+
+
 def _touching(
-    tree: HyperTree,
-    connectivity: int,
-    refines: tuple[Analysis, NDArray[np.intp]] | None,
-    known: str,
-) -> NDArray[np.intp]:
-    """Pairs of touching leaves that are not OUT; for a refinement (the coarser
-    analysis and each leaf's old index), from the coarser analysis's pairs (its
-    attribute ``known``)."""
+    tree: HyperTree, refines: tuple[Analysis, NDArray[np.intp]] | None
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Pairs of touching leaves that are not OUT, by a shared vertex and by a shared
+    face; for a refinement (the coarser analysis and each leaf's old index), from
+    the coarser analysis's pairs."""
     if refines is None:
-        return adjacency(tree, status=IN | BOUNDARY, connectivity=connectivity)
+        return touching(tree, status=IN | BOUNDARY)
     old, old_index = refines
-    old_pairs: NDArray[np.intp] = getattr(old, known)
-    return refined_adjacency(
-        tree, old.tree, old_pairs, old_index, status=IN | BOUNDARY, connectivity=connectivity
+    return refined_touching(
+        tree, old.tree, old._pairs, old._face_pairs, old_index, status=IN | BOUNDARY
     )
 
 
@@ -576,34 +582,66 @@ def _chain_search(
     its predecessor on a shortest chain (-1 for a seed or an unreached leaf),
     its label (the part, ``source``, of the seed its chain starts from; -1 where
     unreached) and the two columns of the pairs searched whose leaves have
-    two labels (in the order of ``pairs``): where chains from two parts meet.
-    A leaf's chain goes on through its neighbour one step nearer with the
-    largest index, whose label it takes."""
+    two labels: where chains from two parts meet (those of two seeds first,
+    then the others, each in the order of ``pairs``). A leaf's chain goes on
+    through its neighbour one step nearer with the largest index, whose label
+    it takes. Every seed is reached at once (0 hops, its own part): a pair of
+    two seeds is no step of a chain, and is left out of the search."""
     n = through.size
     degree = np.zeros(n + 1, dtype=np.int64)
+    # one pass over the pairs: those of two leaves `through`, in order (grown by
+    # doubling), and each leaf's count of them
+    cap = max(1024, n)
+    got_a = np.empty(cap, dtype=np.int64)
+    got_b = np.empty(cap, dtype=np.int64)
+    n_got = 0
     m = 0
+    n_seed_meets = 0
     for t in range(pairs.shape[0]):
         i, j = pairs[t, 0], pairs[t, 1]
-        if through[i] and through[j]:
+        if not (through[i] and through[j]):
+            continue
+        if source[i] >= 0 and source[j] >= 0:
+            if source[i] == source[j]:
+                continue
+            n_seed_meets += 1
+        else:
             degree[i + 1] += 1
             degree[j + 1] += 1
             m += 1
+        if n_got == cap:
+            cap *= 2
+            grown = np.empty(cap, dtype=np.int64)
+            grown[:n_got] = got_a[:n_got]
+            got_a = grown
+            grown = np.empty(cap, dtype=np.int64)
+            grown[:n_got] = got_b[:n_got]
+            got_b = grown
+        got_a[n_got] = i
+        got_b[n_got] = j
+        n_got += 1
     for i in range(n):
         degree[i + 1] += degree[i]
     fill = degree[:-1].copy()
     neighbour = np.empty(2 * m, dtype=np.int64)
-    a = np.empty(m, dtype=np.int64)
-    b = np.empty(m, dtype=np.int64)
-    k = 0
-    for t in range(pairs.shape[0]):
-        i, j = pairs[t, 0], pairs[t, 1]
-        if through[i] and through[j]:
-            a[k], b[k] = i, j
-            k += 1
-            neighbour[fill[i]] = j
-            fill[i] += 1
-            neighbour[fill[j]] = i
-            fill[j] += 1
+    # the pairs of two seeds of two parts first (where parts touch), then the
+    # pairs searched
+    a = np.empty(n_seed_meets + m, dtype=np.int64)
+    b = np.empty(n_seed_meets + m, dtype=np.int64)
+    s = 0
+    k = n_seed_meets
+    for t in range(n_got):
+        i, j = got_a[t], got_b[t]
+        if source[i] >= 0 and source[j] >= 0:
+            a[s], b[s] = i, j
+            s += 1
+            continue
+        a[k], b[k] = i, j
+        k += 1
+        neighbour[fill[i]] = j
+        fill[i] += 1
+        neighbour[fill[j]] = i
+        fill[j] += 1
     hops = np.full(n, np.inf)
     pred = np.full(n, -1, dtype=np.int64)
     label = np.full(n, -1, dtype=np.int64)
@@ -638,8 +676,8 @@ def _chain_search(
                 pred[w] = v
         label[w] = label[pred[w]]
     # the pairs searched whose leaves have two labels: where chains meet
-    k = 0
-    for t in range(m):
+    k = n_seed_meets
+    for t in range(n_seed_meets, n_seed_meets + m):
         la, lb = label[a[t]], label[b[t]]
         if la >= 0 and lb >= 0 and la != lb:
             a[k], b[k] = a[t], b[t]
@@ -747,12 +785,11 @@ class Analysis:
         self.table: SheetTable = (
             classify_sheets(mechanism, leaves.lo, leaves.hi) if table is None else table
         )
-        self.areas = leaf_volumes(tree)
+        self.areas = _leaf_volumes(tree)
         live = np.flatnonzero(tree.status != OUT)
         if evidence is None:
             #: touching leaf pairs (not OUT), by a shared vertex and by a shared face
-            self._pairs = _touching(tree, tree.ndim, flows_of, "_pairs")
-            self._face_pairs = _touching(tree, 1, flows_of, "_face_pairs")
+            self._pairs, self._face_pairs = _touching(tree, flows_of)
             contact = _reachable_contact(mechanism, leaves, self.table, self._pairs)
         else:
             self._pairs, self._face_pairs = evidence.pairs, evidence.face_pairs
@@ -959,9 +996,13 @@ class Analysis:
                 gap = ((labels == u).any(axis=2) & ~certified).any(axis=1)
                 # the part of each leaf holding one (the smallest where several: a
                 # small part sharing the leaves of a large one keeps its own)
-                source = np.full(n, -1, dtype=np.int64)
-                for i in np.argsort(-sizes[parts], kind="stable"):
-                    source[(g.certain == parts[i]).any(axis=1)] = i
+                # (of the parts it holds, the last by decreasing size, stable: its
+                # index in `parts`); rank: a part's place in that order
+                order = np.argsort(-sizes[parts], kind="stable")
+                rank = np.full(g.certain_sign.size + 1, -1, dtype=np.int64)
+                rank[parts[order]] = np.arange(parts.size)
+                last = rank[g.certain].max(axis=1)
+                source = np.where(last >= 0, order[np.maximum(last, 0)], -1).astype(np.int64)
                 mask |= _necks(self._pairs, gap, source, slack)
         return mask
 

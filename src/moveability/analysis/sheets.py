@@ -95,7 +95,14 @@ class SheetTable:
 
     def take(self, index: NDArray[np.intp]) -> SheetTable:
         """The rows of some boxes, in the order given."""
-        return SheetTable(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
+        # np.take along the rows: one copy of each row's bytes (a fancy index of a
+        # table of a million rows takes about three times as long)
+        at = np.asarray(index)
+        if at.dtype == np.bool_:
+            at = np.flatnonzero(at)
+        return SheetTable(
+            **{f.name: np.take(getattr(self, f.name), at, axis=0) for f in fields(self)}
+        )
 
     def statuses(self) -> NDArray[np.uint8]:
         """A tree status per box: OUT where no sheet holds a valid configuration, IN

@@ -143,7 +143,7 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.analysis.regions._certain_edges": [
         (
             array(I8, 2), array("int8", 2), array(B1, 2), array(B1, 2), array(B1, 2),
-            array(B1), B1, array(I8, 2), array(B1, 2), array(I8, 2, out=True), B1,
+            array(B1), B1, array(I8, 2), array(B1, 2),
         )
     ],
     "moveability.analysis.regions._possible_labels": [

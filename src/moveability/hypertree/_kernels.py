@@ -15,7 +15,13 @@ from numpy.typing import NDArray
 from ..compiled import kernel
 from .keys import KeyLayout
 
-__all__ = ["adjacent_pairs", "edge_components", "label_leaves", "remap_pairs"]
+__all__ = [
+    "adjacent_and_face_pairs",
+    "adjacent_pairs",
+    "edge_components",
+    "label_leaves",
+    "remap_pairs",
+]
 
 
 @kernel
@@ -178,7 +184,7 @@ def _pairs(
     directions: NDArray[np.int8],
     sources: NDArray[np.bool_],
     fresh: NDArray[np.bool_],
-) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.bool_]]:  # pragma: no cover
     """Adjacent pairs of chosen leaves, each written once, by its finer leaf.
 
     A leaf's probe in the direction of an adjacent leaf at least as large lands
@@ -187,11 +193,21 @@ def _pairs(
     leaf; a pair of leaves of one level, found from both, is kept from the
     lower index. Only the ``sources`` probe, and a pair of two leaves that are
     not ``fresh`` is left out (a refined tree's pairs between kept leaves are
-    known). One pass: the pairs go to arrays that grow by doubling."""
+    known). One pass: the pairs go to arrays that grow by doubling. The third
+    array flags the pairs found by a probe along an axis (one non-zero entry):
+    those of face adjacency."""
     n = keys.size
     n_dir = directions.shape[0]
     last = np.zeros(n_dir, dtype=np.int64)
     found = np.empty(n_dir, dtype=np.int64)
+    found_face = np.zeros(n_dir, dtype=np.bool_)
+    axial = np.zeros(n_dir, dtype=np.bool_)
+    for d in range(n_dir):
+        nonzero = 0
+        for axis in range(directions.shape[1]):
+            if directions[d, axis] != 0:
+                nonzero += 1
+        axial[d] = nonzero == 1
     n_src = 0
     for i in range(n):
         if chosen[i] and sources[i]:
@@ -200,6 +216,7 @@ def _pairs(
     cap = max(16, n_src * (n_dir // 2 + 1))
     out_a = np.empty(cap, dtype=np.int64)
     out_b = np.empty(cap, dtype=np.int64)
+    out_f = np.empty(cap, dtype=np.bool_)
     total = 0
     for i in range(n):
         if not chosen[i] or not sources[i]:
@@ -223,22 +240,27 @@ def _pairs(
             for t in range(m):
                 if found[t] == j:
                     seen = True
+                    found_face[t] |= axial[d]
                     break
             if not seen:
                 found[m] = j
+                found_face[m] = axial[d]
                 m += 1
         if total + m > cap:
             cap = max(2 * cap, total + m)
             grown_a = np.empty(cap, dtype=np.int64)
             grown_b = np.empty(cap, dtype=np.int64)
+            grown_f = np.empty(cap, dtype=np.bool_)
             grown_a[:total] = out_a[:total]
             grown_b[:total] = out_b[:total]
-            out_a, out_b = grown_a, grown_b
+            grown_f[:total] = out_f[:total]
+            out_a, out_b, out_f = grown_a, grown_b, grown_f
         for t in range(m):
             out_a[total + t] = i
             out_b[total + t] = found[t]
+            out_f[total + t] = found_face[t]
         total += m
-    return out_a[:total], out_b[:total]
+    return out_a[:total], out_b[:total], out_f[:total]
 
 
 def adjacent_pairs(
@@ -262,7 +284,41 @@ def adjacent_pairs(
     every = np.ones(n, dtype=np.bool_)
     src = every if sources is None else sources
     new = every if fresh is None else fresh
-    a, b = _pairs(keys, levels, chosen, *args, directions, src, new)
+    a, b, _ = _pairs(keys, levels, chosen, *args, directions, src, new)
+    return _with_known(a, b, n, known)
+
+
+def adjacent_and_face_pairs(
+    keys: NDArray[np.uint64],
+    levels: NDArray[np.uint8],
+    chosen: NDArray[np.bool_],
+    layout: KeyLayout,
+    periodic: tuple[int, ...],
+    directions: NDArray[np.int8],
+    sources: NDArray[np.bool_] | None = None,
+    fresh: NDArray[np.bool_] | None = None,
+    known: tuple[NDArray[np.int64], NDArray[np.int64]] | None = None,
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """:func:`adjacent_pairs` with ``directions`` and the pairs of those found by
+    its directions along an axis (face adjacency), from one search. ``known``
+    gives both kinds of pairs between kept leaves, for a refined tree."""
+    args = _layout_arrays(layout, periodic)
+    n = keys.size
+    every = np.ones(n, dtype=np.bool_)
+    src = every if sources is None else sources
+    new = every if fresh is None else fresh
+    a, b, face = _pairs(keys, levels, chosen, *args, directions, src, new)
+    known_all, known_faces = (None, None) if known is None else known
+    return (
+        _with_known(a, b, n, known_all),
+        _with_known(a[face], b[face], n, known_faces),
+    )
+
+
+def _with_known(
+    a: NDArray[np.int64], b: NDArray[np.int64], n: int, known: NDArray[np.int64] | None
+) -> NDArray[np.int64]:
+    """The pairs found, and those ``known``, in sorted order."""
     if known is None or not known.size:
         return _sorted_pairs(a, b, n)
     known = np.ascontiguousarray(known, dtype=np.int64)

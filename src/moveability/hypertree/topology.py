@@ -22,7 +22,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
 from ..types import Array
-from ._kernels import adjacent_pairs, edge_components, label_leaves, remap_pairs
+from ._kernels import (
+    adjacent_and_face_pairs,
+    adjacent_pairs,
+    edge_components,
+    label_leaves,
+    remap_pairs,
+)
 from .status import IN, status_mask
 from .tree import HyperTree, to_coordinates
 
@@ -33,6 +39,8 @@ __all__ = [
     "directions",
     "edge_components",
     "refined_adjacency",
+    "refined_touching",
+    "touching",
 ]
 
 
@@ -167,6 +175,104 @@ def refined_adjacency(
         fresh=~kept,
         known=known,
     ).astype(np.intp, copy=False)
+
+
+def touching(
+    tree: HyperTree, *, status: int | None = None
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """:func:`adjacency` by a shared vertex and by a shared face, from one search.
+
+    The pairs by a face are those that the vertex search finds along an axis
+    (each pair is found from its finer leaf in both): ``(adjacency(tree,
+    status=status, connectivity=tree.ndim), adjacency(tree, status=status,
+    connectivity=1))``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability import HyperTree
+    >>> tree = HyperTree.from_array(np.ones((2, 2), dtype=bool), merge=False)
+    >>> vertex, face = touching(tree)
+    >>> len(vertex), face.tolist()
+    (6, [[0, 1], [0, 2], [1, 3], [2, 3]])
+    """
+    chosen = (
+        np.ones(len(tree), dtype=bool) if status is None else (status_mask(status)[tree.status])
+    )
+    pairs, faces = adjacent_and_face_pairs(
+        tree.keys, tree.levels, chosen, tree.layout, tree.periodic, directions(tree.ndim, tree.ndim)
+    )
+    return pairs.astype(np.intp, copy=False), faces.astype(np.intp, copy=False)
+
+
+def refined_touching(
+    tree: HyperTree,
+    old_tree: HyperTree,
+    old_pairs: NDArray[np.intp],
+    old_face_pairs: NDArray[np.intp],
+    old_index: NDArray[np.intp],
+    *,
+    status: int | None = None,
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """:func:`touching` of a tree refined from ``old_tree``, whose pairs are known.
+
+    ``old_pairs`` and ``old_face_pairs`` are ``touching(old_tree, status=status)``;
+    ``old_index`` as in :func:`refined_adjacency`: kept leaves keep their pairs
+    of both kinds with each other, and only the new leaves and the kept leaves
+    that touched a split one probe (once, for both kinds).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability import BOUNDARY, HyperTree
+    >>> def undecided(lo, hi):
+    ...     return np.full(len(lo), BOUNDARY, dtype=np.uint8)
+    >>> coarse = HyperTree.build([0, 0], [1, 1], undecided, max_depth=3, stop_level=1)
+    >>> fine = coarse.refine([True, False, False, False], undecided)
+    >>> index = np.array([-1, -1, -1, -1, 1, 2, 3])  # the children of leaf 0 come first
+    >>> vertex, face = refined_touching(fine, coarse, *touching(coarse), index)
+    >>> all(np.array_equal(a, b) for a, b in zip((vertex, face), touching(fine)))
+    True
+    """
+    chosen = (
+        np.ones(len(tree), dtype=bool) if status is None else (status_mask(status)[tree.status])
+    )
+    old_chosen = (
+        np.ones(len(old_tree), dtype=bool)
+        if status is None
+        else (status_mask(status)[old_tree.status])
+    )
+    old_index = np.asarray(old_index, dtype=np.int64)
+    if old_index.shape != (len(tree),) or old_index.max(initial=-1) >= len(old_tree):
+        raise InvalidParameterError(
+            "old_index", f"one index below {len(old_tree)} (or -1) per leaf", old_index.shape
+        )
+    kept = old_index >= 0
+    new_of_old = np.full(len(old_tree), -1, dtype=np.int64)
+    new_of_old[old_index[kept]] = np.flatnonzero(kept)
+    split = new_of_old < 0
+    if (split & ~old_chosen).any():
+        return touching(tree, status=status)
+    # the kept leaves that touched a split one probe: those by a face among them
+    sources = ~kept
+    known = remap_pairs(np.asarray(old_pairs, dtype=np.int64).reshape(-1, 2), new_of_old, sources)
+    known_faces = remap_pairs(
+        np.asarray(old_face_pairs, dtype=np.int64).reshape(-1, 2),
+        new_of_old,
+        np.zeros(len(tree), dtype=bool),
+    )
+    pairs, faces = adjacent_and_face_pairs(
+        tree.keys,
+        tree.levels,
+        chosen,
+        tree.layout,
+        tree.periodic,
+        directions(tree.ndim, tree.ndim),
+        sources=sources,
+        fresh=~kept,
+        known=(known, known_faces),
+    )
+    return pairs.astype(np.intp, copy=False), faces.astype(np.intp, copy=False)
 
 
 def components(
