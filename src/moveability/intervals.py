@@ -54,8 +54,14 @@ __all__ = [
     "rational",
     "sin",
     "slot_add",
+    "slot_add_c",
+    "slot_c_sub",
+    "slot_det3",
     "slot_mul",
+    "slot_mul_c",
+    "slot_negate",
     "slot_sub",
+    "slot_sub_c",
     "sqrt",
     "square",
     "step_down",
@@ -338,6 +344,79 @@ def slot_add(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  
 def slot_sub(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = slot ``a`` - slot ``b``, by :func:`sub_into`."""
     sub_into(lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w], lo[o, :w], hi[o, :w])
+
+
+@kernel
+def slot_mul_c(
+    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = slot ``a`` * the interval ``[c_lo, c_hi]`` (``Interval * c``)."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_mul(a_lo[j], a_hi[j], c_lo, c_hi)
+
+
+@kernel
+def slot_add_c(
+    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = slot ``a`` + the interval ``[c_lo, c_hi]``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_add(a_lo[j], a_hi[j], c_lo, c_hi)
+
+
+@kernel
+def slot_sub_c(
+    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = slot ``a`` - the interval ``[c_lo, c_hi]``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_sub(a_lo[j], a_hi[j], c_lo, c_hi)
+
+
+@kernel
+def slot_c_sub(
+    lo: Array, hi: Array, c_lo: float, c_hi: float, a: Slot, o: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = the interval ``[c_lo, c_hi]`` - slot ``a``."""
+    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
+    for j in range(w):
+        o_lo[j], o_hi[j] = interval_sub(c_lo, c_hi, a_lo[j], a_hi[j])
+
+
+@kernel
+def slot_negate(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = - slot ``a`` (exact)."""
+    for j in range(w):
+        a_lo = lo[a, j]
+        lo[o, j] = -hi[a, j]
+        hi[o, j] = -a_lo
+
+
+@kernel
+def slot_det3(
+    lo: Array, hi: Array, m: NDArray[np.int64], o: Slot, t: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``o`` = the determinant of the 3 x 3 matrix of slots ``m`` (9, row by
+    row) as ``mechanisms.base._det_chunk`` expands it: the first row's cofactors,
+    alternately subtracted and added. Slots ``t``, ``t + 1`` are scratch."""
+    p, q = t, t + 1
+    slot_mul(lo, hi, m[4], m[8], p, w)
+    slot_mul(lo, hi, m[5], m[7], q, w)
+    slot_sub(lo, hi, p, q, p, w)
+    slot_mul(lo, hi, m[0], p, o, w)
+    slot_mul(lo, hi, m[3], m[8], p, w)
+    slot_mul(lo, hi, m[5], m[6], q, w)
+    slot_sub(lo, hi, p, q, p, w)
+    slot_mul(lo, hi, m[1], p, q, w)
+    slot_sub(lo, hi, o, q, o, w)
+    slot_mul(lo, hi, m[3], m[7], p, w)
+    slot_mul(lo, hi, m[4], m[6], q, w)
+    slot_sub(lo, hi, p, q, p, w)
+    slot_mul(lo, hi, m[2], p, q, w)
+    slot_add(lo, hi, o, q, o, w)
 
 
 @kernel

@@ -51,8 +51,14 @@ from ..intervals import (
     interval_sub,
     move_below,
     slot_add,
+    slot_add_c,
+    slot_c_sub,
+    slot_det3,
     slot_mul,
+    slot_mul_c,
+    slot_negate,
     slot_sub,
+    slot_sub_c,
     step_down,
 )
 from ..types import Array
@@ -243,85 +249,12 @@ _CHUNK = 128
 
 
 @kernel
-def _mul_c(
-    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = slot ``a`` * the interval ``[c_lo, c_hi]`` (``Interval * c``)."""
-    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_mul(a_lo[j], a_hi[j], c_lo, c_hi)
-
-
-@kernel
-def _add_c(
-    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = slot ``a`` + the interval ``[c_lo, c_hi]``."""
-    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_add(a_lo[j], a_hi[j], c_lo, c_hi)
-
-
-@kernel
-def _sub_c(
-    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = slot ``a`` - the interval ``[c_lo, c_hi]``."""
-    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_sub(a_lo[j], a_hi[j], c_lo, c_hi)
-
-
-@kernel
-def _c_sub(
-    lo: Array, hi: Array, c_lo: float, c_hi: float, a: Slot, o: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = the interval ``[c_lo, c_hi]`` - slot ``a``."""
-    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_sub(c_lo, c_hi, a_lo[j], a_hi[j])
-
-
-@kernel
-def _negate(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = - slot ``a`` (exact)."""
-    for j in range(w):
-        a_lo = lo[a, j]
-        lo[o, j] = -hi[a, j]
-        hi[o, j] = -a_lo
-
-
-@kernel
 def _div_into(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
     """Slot ``o`` = slot ``a`` / slot ``b`` (``Interval.__truediv__``)."""
     a_lo, a_hi, b_lo, b_hi = lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w]
     o_lo, o_hi = lo[o, :w], hi[o, :w]
     for j in range(w):
         o_lo[j], o_hi[j] = _div(a_lo[j], a_hi[j], b_lo[j], b_hi[j])
-
-
-@kernel
-def _det3(
-    lo: Array, hi: Array, m: NDArray[np.int64], o: Slot, t: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = the determinant of the 3 x 3 matrix of slots ``m`` (9, row by
-    row) as ``base._det_chunk`` expands it: the first row's cofactors,
-    alternately subtracted and added. Slots ``t``, ``t + 1`` are scratch."""
-    p, q = t, t + 1
-    slot_mul(lo, hi, m[4], m[8], p, w)
-    slot_mul(lo, hi, m[5], m[7], q, w)
-    slot_sub(lo, hi, p, q, p, w)
-    slot_mul(lo, hi, m[0], p, o, w)
-    slot_mul(lo, hi, m[3], m[8], p, w)
-    slot_mul(lo, hi, m[5], m[6], q, w)
-    slot_sub(lo, hi, p, q, p, w)
-    slot_mul(lo, hi, m[1], p, q, w)
-    slot_sub(lo, hi, o, q, o, w)
-    slot_mul(lo, hi, m[3], m[7], p, w)
-    slot_mul(lo, hi, m[4], m[6], q, w)
-    slot_sub(lo, hi, p, q, p, w)
-    slot_mul(lo, hi, m[2], p, q, w)
-    slot_add(lo, hi, o, q, o, w)
 
 
 # the slots of a chunk: the box (x, y, z) and its centre; the cosine and sine of
@@ -349,13 +282,13 @@ def _rows(
     for k in range(3):
         leg = legs[k]
         ca, sa, row = arm_trig + 2 * k, arm_trig + 2 * k + 1, rows + 3 * k
-        _mul_c(lo, hi, trig + 2 * k, leg[ARM], leg[ARM], ca, w)
-        _c_sub(lo, hi, leg[OFF_LO], leg[OFF_HI], ca, h, w)
-        _mul_c(lo, hi, h, leg[UX_LO], leg[UX_HI], row, w)
+        slot_mul_c(lo, hi, trig + 2 * k, leg[ARM], leg[ARM], ca, w)
+        slot_c_sub(lo, hi, leg[OFF_LO], leg[OFF_HI], ca, h, w)
+        slot_mul_c(lo, hi, h, leg[UX_LO], leg[UX_HI], row, w)
         slot_add(lo, hi, x, row, row, w)
-        _mul_c(lo, hi, h, leg[UY_LO], leg[UY_HI], row + 1, w)
+        slot_mul_c(lo, hi, h, leg[UY_LO], leg[UY_HI], row + 1, w)
         slot_add(lo, hi, x + 1, row + 1, row + 1, w)
-        _mul_c(lo, hi, trig + 2 * k + 1, leg[ARM], leg[ARM], sa, w)
+        slot_mul_c(lo, hi, trig + 2 * k + 1, leg[ARM], leg[ARM], sa, w)
         slot_add(lo, hi, x + 2, sa, row + 2, w)
 
 
@@ -378,15 +311,15 @@ def _plain_rest(
     matrix = np.arange(9, dtype=np.int64)
     for i in range(9):
         matrix[i] = rows + i
-    _det3(lo, hi, matrix, nat, t, w)
+    slot_det3(lo, hi, matrix, nat, t, w)
     # the centres into the rows of cm (leg k's at + 3 k), in place below
     for k in range(3):
         leg = legs[k]
         c = cm + 3 * k
-        _sub_c(lo, hi, arm_trig + 2 * k, leg[OFF_LO], leg[OFF_HI], h, w)
-        _mul_c(lo, hi, h, leg[UX_LO], leg[UX_HI], c, w)
-        _mul_c(lo, hi, h, leg[UY_LO], leg[UY_HI], c + 1, w)
-        _negate(lo, hi, arm_trig + 2 * k + 1, c + 2, w)
+        slot_sub_c(lo, hi, arm_trig + 2 * k, leg[OFF_LO], leg[OFF_HI], h, w)
+        slot_mul_c(lo, hi, h, leg[UX_LO], leg[UX_HI], c, w)
+        slot_mul_c(lo, hi, h, leg[UY_LO], leg[UY_HI], c + 1, w)
+        slot_negate(lo, hi, arm_trig + 2 * k + 1, c + 2, w)
     # P - c_1, c_1 - c_2, c_1 - c_3 (the first row last: it overwrites c_1)
     for e in range(3):
         slot_sub(lo, hi, cm + e, cm + 3 + e, cm + 3 + e, w)
@@ -394,7 +327,7 @@ def _plain_rest(
         slot_sub(lo, hi, x + e, cm + e, cm + e, w)
     for i in range(9):
         matrix[i] = cm + i
-    _det3(lo, hi, matrix, alt, t, w)
+    slot_det3(lo, hi, matrix, alt, t, w)
     for j in range(w):
         lo[o, j] = _max(lo[nat, j], lo[alt, j])
         hi[o, j] = _min(hi[nat, j], hi[alt, j])
@@ -637,17 +570,17 @@ def mean_value_bounds(
         for k in range(3):
             leg = legs[k]
             # s = x u_x + y u_y + (r - R), as _plane
-            _mul_c(s_lo, s_hi, x, leg[UX_LO], leg[UX_HI], t, size)
-            _mul_c(s_lo, s_hi, x + 1, leg[UY_LO], leg[UY_HI], t + 1, size)
+            slot_mul_c(s_lo, s_hi, x, leg[UX_LO], leg[UX_HI], t, size)
+            slot_mul_c(s_lo, s_hi, x + 1, leg[UY_LO], leg[UY_HI], t + 1, size)
             slot_add(s_lo, s_hi, t, t + 1, sp, size)
-            _add_c(s_lo, s_hi, sp, leg[OFF_LO], leg[OFF_HI], sp, size)
+            slot_add_c(s_lo, s_hi, sp, leg[OFF_LO], leg[OFF_HI], sp, size)
             slot_mul(s_lo, s_hi, sp, trig + 2 * k + 1, t, size)
             slot_mul(s_lo, s_hi, x + 2, trig + 2 * k, t + 1, size)
             slot_add(s_lo, s_hi, t, t + 1, den, size)
-            _mul_c(s_lo, s_hi, den, leg[ARM], leg[ARM], den, size)
+            slot_mul_c(s_lo, s_hi, den, leg[ARM], leg[ARM], den, size)
             for e in range(3):
                 _div_into(s_lo, s_hi, rows + 3 * k + e, den, grad + 3 * k + e, size)
-                _negate(s_lo, s_hi, grad + 3 * k + e, grad + 3 * k + e, size)
+                slot_negate(s_lo, s_hi, grad + 3 * k + e, grad + 3 * k + e, size)
         for axis in range(3):
             for i in range(3):
                 leg = legs[i]
@@ -655,7 +588,7 @@ def mean_value_bounds(
                 # d row / dq = (la sin u_x, la sin u_y, la cos)
                 for j in range(3):
                     if j < 2:
-                        _mul_c(
+                        slot_mul_c(
                             s_lo, s_hi, arm_trig + 2 * i + 1,
                             leg[UX_LO] if j == 0 else leg[UY_LO],
                             leg[UX_HI] if j == 0 else leg[UY_HI],
@@ -666,7 +599,7 @@ def mean_value_bounds(
                         slot_mul(s_lo, s_hi, arm_trig + 2 * i, grad + 3 * i + axis, moved + j, size)
                     for ax in range(3):
                         unit = j == ax and ax == axis
-                        _add_c(
+                        slot_add_c(
                             s_lo, s_hi, moved + j,
                             one_lo if unit else zero_lo, one_hi if unit else zero_hi,
                             moved + j, size,
@@ -676,9 +609,9 @@ def mean_value_bounds(
                 for j in range(3):
                     matrix[3 * i + j] = moved + j
                 if i == 0:
-                    _det3(s_lo, s_hi, matrix, rate, t, size)
+                    slot_det3(s_lo, s_hi, matrix, rate, t, size)
                 else:
-                    _det3(s_lo, s_hi, matrix, term, t, size)
+                    slot_det3(s_lo, s_hi, matrix, term, t, size)
                     slot_add(s_lo, s_hi, rate, term, rate, size)
             slot_sub(s_lo, s_hi, x + axis, mx + axis, width, size)
             slot_mul(s_lo, s_hi, rate, width, term, size)

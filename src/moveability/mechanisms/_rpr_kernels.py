@@ -23,18 +23,19 @@ their phi, then of its sine (``intervals.cos`` and ``sin``).
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ..compiled import kernel
 from ..intervals import (
     Slot,
-    interval_mul,
-    interval_sub,
     next_below,
     point_sin_cos,
     slot_add,
+    slot_det3,
     slot_mul,
+    slot_mul_c,
+    slot_negate,
     slot_sub,
+    slot_sub_c,
 )
 from ..types import Array
 
@@ -73,31 +74,6 @@ def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
 
 #: boxes per chunk: the scratch (about 50 slots, 2 x 8 bytes a box each) stays in cache
 _CHUNK = 256
-
-
-@kernel
-def _scale(lo: Array, hi: Array, a: Slot, c: float, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = slot ``a`` * the number ``c`` (``Interval * float``)."""
-    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_mul(a_lo[j], a_hi[j], c, c)
-
-
-@kernel
-def _shift(lo: Array, hi: Array, a: Slot, c: float, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = slot ``a`` - the number ``c`` (``Interval - float``)."""
-    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_sub(a_lo[j], a_hi[j], c, c)
-
-
-@kernel
-def _negate(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = - slot ``a`` (exact)."""
-    for j in range(w):
-        a_lo = lo[a, j]
-        lo[o, j] = -hi[a, j]
-        hi[o, j] = -a_lo
 
 
 @kernel
@@ -149,61 +125,34 @@ def _leg(
     ax, ay, bx, by = ab[0], ab[1], ab[2], ab[3]
     p, q, rbx, rby, px, py = t, t + 1, t + 2, t + 3, t + 4, t + 5
     # R(phi) b: rbx = c bx - s by, rby = s bx + c by
-    _scale(lo, hi, c, bx, p, w)
-    _scale(lo, hi, c + 1, by, q, w)
+    slot_mul_c(lo, hi, c, bx, bx, p, w)
+    slot_mul_c(lo, hi, c + 1, by, by, q, w)
     slot_sub(lo, hi, p, q, rbx, w)
-    _scale(lo, hi, c + 1, bx, p, w)
-    _scale(lo, hi, c, by, q, w)
+    slot_mul_c(lo, hi, c + 1, bx, bx, p, w)
+    slot_mul_c(lo, hi, c, by, by, q, w)
     slot_add(lo, hi, p, q, rby, w)
     # d = (P + R b) - A
     slot_add(lo, hi, x, rbx, row, w)
-    _shift(lo, hi, row, ax, row, w)
+    slot_sub_c(lo, hi, row, ax, ax, row, w)
     slot_add(lo, hi, x + 1, rby, row + 1, w)
-    _shift(lo, hi, row + 1, ay, row + 1, w)
+    slot_sub_c(lo, hi, row + 1, ay, ay, row + 1, w)
     if partials == _TARGET:
         return
     # the turn (R b) x (P - A)
-    _shift(lo, hi, x, ax, px, w)
-    _shift(lo, hi, x + 1, ay, py, w)
+    slot_sub_c(lo, hi, x, ax, ax, px, w)
+    slot_sub_c(lo, hi, x + 1, ay, ay, py, w)
     slot_mul(lo, hi, rbx, py, p, w)
     slot_mul(lo, hi, rby, px, q, w)
     slot_sub(lo, hi, p, q, row + 2, w)
     if partials < 0:
         return
-    _negate(lo, hi, rby, partials, w)
+    slot_negate(lo, hi, rby, partials, w)
     lo[partials + 1, :w] = lo[rbx, :w]
     hi[partials + 1, :w] = hi[rbx, :w]
     slot_mul(lo, hi, rbx, px, p, w)
     slot_mul(lo, hi, rby, py, q, w)
     slot_add(lo, hi, p, q, partials + 2, w)
-    _negate(lo, hi, partials + 2, partials + 2, w)
-
-
-@kernel
-def _det3(
-    lo: Array, hi: Array, m: NDArray[np.int64], o: Slot, t: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = the determinant of the 3 x 3 matrix of slots ``m`` (9, row by
-    row) as ``base._det_chunk`` expands it: the first row's cofactors,
-    alternately subtracted and added. Slots ``t``, ``t + 1`` are scratch."""
-    p, q = t, t + 1
-    # j = 0: a00 (a11 a22 - a12 a21)
-    slot_mul(lo, hi, m[4], m[8], p, w)
-    slot_mul(lo, hi, m[5], m[7], q, w)
-    slot_sub(lo, hi, p, q, p, w)
-    slot_mul(lo, hi, m[0], p, o, w)
-    # j = 1: - a01 (a10 a22 - a12 a20)
-    slot_mul(lo, hi, m[3], m[8], p, w)
-    slot_mul(lo, hi, m[5], m[6], q, w)
-    slot_sub(lo, hi, p, q, p, w)
-    slot_mul(lo, hi, m[1], p, q, w)
-    slot_sub(lo, hi, o, q, o, w)
-    # j = 2: + a02 (a10 a21 - a11 a20)
-    slot_mul(lo, hi, m[3], m[7], p, w)
-    slot_mul(lo, hi, m[4], m[6], q, w)
-    slot_sub(lo, hi, p, q, p, w)
-    slot_mul(lo, hi, m[2], p, q, w)
-    slot_add(lo, hi, o, q, o, w)
+    slot_negate(lo, hi, partials + 2, partials + 2, w)
 
 
 # the slots of det_a_bounds
@@ -253,8 +202,8 @@ def det_a_bounds(
             part = np.int64(_PARTS) + 3 * k
             _leg(s_lo, s_hi, x, c, legs[k], rows[3 * k], part, temp, size)
             _leg(s_lo, s_hi, mx, mc, legs[k], centre[3 * k], np.int64(_NONE), temp, size)
-        _det3(s_lo, s_hi, rows, nat, temp, size)
-        _det3(s_lo, s_hi, centre, tot, temp, size)
+        slot_det3(s_lo, s_hi, rows, nat, temp, size)
+        slot_det3(s_lo, s_hi, centre, tot, temp, size)
         for axis in range(3):
             for k in range(3):
                 # the rows with leg k's differentiated along the axis: along x
@@ -268,9 +217,9 @@ def det_a_bounds(
                 else:
                     matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = part, part + 1, part + 2
                 if k == 0:
-                    _det3(s_lo, s_hi, matrix, total, temp, size)
+                    slot_det3(s_lo, s_hi, matrix, total, temp, size)
                 else:
-                    _det3(s_lo, s_hi, matrix, term, temp, size)
+                    slot_det3(s_lo, s_hi, matrix, term, temp, size)
                     slot_add(s_lo, s_hi, total, term, total, size)
             # + dD/dx_j * (x_j - c_j)
             slot_sub(s_lo, s_hi, x + axis, mx + axis, width, size)

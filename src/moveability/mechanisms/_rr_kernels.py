@@ -48,8 +48,12 @@ from ..intervals import (
     interval_sub,
     move_below,
     slot_add,
+    slot_add_c,
+    slot_c_sub,
     slot_mul,
+    slot_mul_c,
     slot_sub,
+    slot_sub_c,
     step_down,
 )
 from ..types import Array
@@ -237,10 +241,10 @@ def _knee_passes(
     for a leg of proximal length ``a`` and base ``(bx, by)``: ``c = cos * a``, ``s =
     sin * a`` in place, then the elbow ``(c + bx, s + by)`` into slots ``c + 2``,
     ``c + 3``."""
-    _mul_c(lo, hi, c, a, a, c, w)
-    _mul_c(lo, hi, c + 1, a, a, c + 1, w)
-    _add_c(lo, hi, c, bx, bx, c + 2, w)
-    _add_c(lo, hi, c + 1, by, by, c + 3, w)
+    slot_mul_c(lo, hi, c, a, a, c, w)
+    slot_mul_c(lo, hi, c + 1, a, a, c + 1, w)
+    slot_add_c(lo, hi, c, bx, bx, c + 2, w)
+    slot_add_c(lo, hi, c + 1, by, by, c + 3, w)
 
 
 @kernel(inline=True)
@@ -265,46 +269,6 @@ def _g(
 
 #: boxes per chunk: the scratch (about 40 slots, 2 x 8 bytes a box each) stays in cache
 _CHUNK = 256
-
-
-@kernel
-def _mul_c(
-    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = slot ``a`` * the interval ``[c_lo, c_hi]`` (``Interval * c``)."""
-    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_mul(a_lo[j], a_hi[j], c_lo, c_hi)
-
-
-@kernel
-def _add_c(
-    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = slot ``a`` + the interval ``[c_lo, c_hi]``."""
-    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_add(a_lo[j], a_hi[j], c_lo, c_hi)
-
-
-@kernel
-def _sub_c(
-    lo: Array, hi: Array, a: Slot, c_lo: float, c_hi: float, o: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = slot ``a`` - the interval ``[c_lo, c_hi]``."""
-    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_sub(a_lo[j], a_hi[j], c_lo, c_hi)
-
-
-@kernel
-def _c_sub(
-    lo: Array, hi: Array, c_lo: float, c_hi: float, a: Slot, o: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = the interval ``[c_lo, c_hi]`` - slot ``a``."""
-    a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_sub(c_lo, c_hi, a_lo[j], a_hi[j])
 
 
 @kernel
@@ -346,17 +310,17 @@ def _branch_form(
     ox, oy, u, v, cross, wx, wy, dot, shift = (
         t + 8, t + 9, t + 10, t + 11, t + 12, t + 13, t + 14, t + 15, t + 16,
     )  # fmt: skip
-    _sub_c(lo, hi, px, leg[BASE_X], leg[BASE_X], x, w)
-    _sub_c(lo, hi, px + 1, leg[BASE_Y], leg[BASE_Y], y, w)
+    slot_sub_c(lo, hi, px, leg[BASE_X], leg[BASE_X], x, w)
+    slot_sub_c(lo, hi, px + 1, leg[BASE_Y], leg[BASE_Y], y, w)
     _square_into(lo, hi, x, sx, w)
     _square_into(lo, hi, y, sy, w)
     slot_add(lo, hi, sx, sy, rho, w)
     # 1 - c = 0.5 - shift / (2 rho)
-    _mul_c(lo, hi, rho, 2.0, 2.0, r2, w)
+    slot_mul_c(lo, hi, rho, 2.0, 2.0, r2, w)
     lo[shift, :w] = leg[SHIFT_LO]
     hi[shift, :w] = leg[SHIFT_HI]
     _div_into(lo, hi, shift, r2, omc, w)
-    _c_sub(lo, hi, 0.5, 0.5, omc, omc, w)
+    slot_c_sub(lo, hi, 0.5, 0.5, omc, omc, w)
     # k: the square root of the range of g over rho (its ends, and its top where
     # rho may reach a^2 + b^2), over 2 rho
     top, four_a2, shift_lo, shift_hi = leg[TOP], leg[FOUR_A2], leg[SHIFT_LO], leg[SHIFT_HI]
@@ -366,8 +330,8 @@ def _branch_form(
         for j in range(w):
             r = lo[rho, j] if end == 0 else hi[rho, j]
             lo[wx, j], hi[wx, j] = r, r
-        _mul_c(lo, hi, wx, four_a2, four_a2, wy, w)
-        _add_c(lo, hi, wx, shift_lo, shift_hi, dot, w)
+        slot_mul_c(lo, hi, wx, four_a2, four_a2, wy, w)
+        slot_add_c(lo, hi, wx, shift_lo, shift_hi, dot, w)
         _square_into(lo, hi, dot, dot, w)
         slot_sub(lo, hi, wy, dot, e, w)
     for j in range(w):
@@ -376,8 +340,8 @@ def _branch_form(
         lo[k, j], hi[k, j] = _sqrt(ends_lo, _max(ends_hi, g_top) if inside else ends_hi)
     _div_into(lo, hi, k, r2, k, w)
     # (Q - O) x (P - O) and (P - O) . (P - Q)
-    _sub_c(lo, hi, q, leg[BASE_X], leg[BASE_X], ox, w)
-    _sub_c(lo, hi, q + 1, leg[BASE_Y], leg[BASE_Y], oy, w)
+    slot_sub_c(lo, hi, q, leg[BASE_X], leg[BASE_X], ox, w)
+    slot_sub_c(lo, hi, q + 1, leg[BASE_Y], leg[BASE_Y], oy, w)
     slot_mul(lo, hi, ox, y, u, w)
     slot_mul(lo, hi, oy, x, v, w)
     slot_sub(lo, hi, u, v, cross, w)
@@ -389,7 +353,7 @@ def _branch_form(
     # (1 - c) cross + (k dot) side
     slot_mul(lo, hi, omc, cross, u, w)
     slot_mul(lo, hi, k, dot, v, w)
-    _mul_c(lo, hi, v, side, side, v, w)
+    slot_mul_c(lo, hi, v, side, side, v, w)
     slot_add(lo, hi, u, v, o, w)
 
 
@@ -463,7 +427,7 @@ def det_a_bounds(
                     s_lo, s_hi, leg0 if leg == 0 else leg1, side, g_top[leg], p, other, form,
                     temp, size,
                 )  # fmt: skip
-                _mul_c(s_lo, s_hi, form, sign, sign, form, size)
+                slot_mul_c(s_lo, s_hi, form, sign, sign, form, size)
                 for j in range(size):
                     m_lo = _max(s_lo[nat, j], s_lo[form, j])
                     m_hi = _min(s_hi[nat, j], s_hi[form, j])
@@ -510,9 +474,9 @@ def _distance_g(
     """The squared distance from the base ``(bx, by)`` of the point in slots
     ``point``, ``point + 1`` into ``rho2``, and ``g`` of it into slot ``g``."""
     a, b, r = np.int64(_LA), np.int64(_LB), np.int64(_LR)
-    _sub_c(lo, hi, point, bx, bx, a, w)
+    slot_sub_c(lo, hi, point, bx, bx, a, w)
     _square_into(lo, hi, a, a, w)
-    _sub_c(lo, hi, point + 1, by, by, b, w)
+    slot_sub_c(lo, hi, point + 1, by, by, b, w)
     _square_into(lo, hi, b, b, w)
     slot_add(lo, hi, a, b, rho2, w)
     _sqrt_into(lo, hi, rho2, r, w)
@@ -549,8 +513,8 @@ def _leg_chunk(
     hi[_LK, :w] = leg[K_HI]
     _distance_g(lo, hi, np.int64(_LNEAR), np.int64(_LN2), np.int64(_LGN), bx, by, w)
     _distance_g(lo, hi, np.int64(_LFAR), np.int64(_LF2), np.int64(_LGF), bx, by, w)
-    _sub_c(lo, hi, np.int64(_LP), bx, bx, np.int64(_LDX), w)
-    _sub_c(lo, hi, np.int64(_LP + 1), by, by, np.int64(_LDY), w)
+    slot_sub_c(lo, hi, np.int64(_LP), bx, bx, np.int64(_LDX), w)
+    slot_sub_c(lo, hi, np.int64(_LP + 1), by, by, np.int64(_LDY), w)
 
 
 @kernel
@@ -738,7 +702,7 @@ def fold_terms_prepare(
         slot_add(s_lo, s_hi, a, b, rho2, size)
         _sqrt_into(s_lo, s_hi, rho2, rho, size)
         _div_into(s_lo, s_hi, np.int64(_LK), rho2, q, size)
-        _c_sub(s_lo, s_hi, leg[SLOPE_LO], leg[SLOPE_HI], q, slope, size)
+        slot_c_sub(s_lo, s_hi, leg[SLOPE_LO], leg[SLOPE_HI], q, slope, size)
         terms_lo[DX, s : s + size] = s_lo[_LDX, :size]
         terms_hi[DX, s : s + size] = s_hi[_LDX, :size]
         terms_lo[DY, s : s + size] = s_lo[_LDY, :size]
