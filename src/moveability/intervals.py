@@ -67,6 +67,7 @@ __all__ = [
     "step_down",
     "sub_into",
     "tan",
+    "trig_bounds",
     "widen_down",
     "widen_up",
 ]
@@ -699,6 +700,11 @@ def _trig_bounds(
         out_lo[i] = low if low != low else max(low, -1.0)
         out_hi[i] = high if high != high else min(high, 1.0)
     return out_lo, out_hi
+
+
+#: the cosine (``sine=False``) or sine bounds of angle enclosures, public for the
+#: compiled code of the mechanisms (the same kernel, so the same floats)
+trig_bounds = _trig_bounds
 
 
 def _trig(x: Interval, sine: bool) -> Interval:

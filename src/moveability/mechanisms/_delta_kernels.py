@@ -9,7 +9,7 @@ primitives of :mod:`moveability.intervals` that the Interval operators apply
 element by element (``mul_into`` and the slots' passes, ``interval_mul``,
 ``interval_add``, ``interval_sub``; ``next_below`` in its inlined form
 ``step_down``; the library functions' widening ``move_below`` with
-``_rel(4)``; the cosines and sines of angle enclosures by ``_trig_bounds``
+``_rel(4)``; the cosines and sines of angle enclosures by ``intervals.trig_bounds``
 itself). The bounds are thus the same floats, bit for bit
 (tests/mechanisms/test_delta_kernels.py compares them on random boxes of every
 kind). det A runs chunk by chunk, one vectorised pass per operation over the
@@ -45,7 +45,6 @@ from numpy.typing import NDArray
 from ..compiled import kernel
 from ..intervals import (
     Slot,
-    _trig_bounds,
     interval_add,
     interval_mul,
     interval_sub,
@@ -60,6 +59,7 @@ from ..intervals import (
     slot_sub,
     slot_sub_c,
     step_down,
+    trig_bounds,
 )
 from ..types import Array
 
@@ -360,13 +360,13 @@ def _load(
 @kernel
 def _trig_of(a_lo: Array, a_hi: Array) -> Array:  # pragma: no cover - compiled
     """``intervals.cos`` and ``sin`` of the angle enclosures ``[a_lo, a_hi]`` (3,
-    n), by ``intervals._trig_bounds``: (4, 3, n), the bounds of the cosines, then
+    n), by ``intervals.trig_bounds``: (4, 3, n), the bounds of the cosines, then
     of the sines."""
     n = a_lo.shape[1]
     out = np.empty((4, 3, n))
     flat_lo, flat_hi = a_lo.copy().reshape(-1), a_hi.copy().reshape(-1)
-    c_lo, c_hi = _trig_bounds(flat_lo, flat_hi, False, _LIB_REL, _LIB_TINY)
-    s_lo, s_hi = _trig_bounds(flat_lo, flat_hi, True, _LIB_REL, _LIB_TINY)
+    c_lo, c_hi = trig_bounds(flat_lo, flat_hi, False, _LIB_REL, _LIB_TINY)
+    s_lo, s_hi = trig_bounds(flat_lo, flat_hi, True, _LIB_REL, _LIB_TINY)
     out[0] = c_lo.reshape(3, n)
     out[1] = c_hi.reshape(3, n)
     out[2] = s_lo.reshape(3, n)
