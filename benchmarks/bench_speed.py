@@ -34,6 +34,9 @@ comparisons printed, each with its target (printed, never asserted):
    precisions 0.1 .. 0.005 and the 3-RPR at 1/64 .. 1/256 of each span, with
    leaves * eps (2-D) and leaves * eps^2 (3-D, eps the fraction of the span):
    constant when the leaves follow the boundary of the sets.
+6. The other mechanisms of the examples (biglide, the user-defined five-bar,
+   the Delta, the 3-RRR): leaves, seconds and microseconds a leaf of
+   ``analyze`` at one precision each.
 
 The counts and areas of the numpy grids are printed beside the certified
 bounds, so that a reader sees they agree. Run:
@@ -587,14 +590,36 @@ def case_scaling(five_bar: Sequence[float], rpr_parts: Sequence[int]) -> None:
     for parts in rpr_parts:
         precision = span_precision(params, parts)
         rows.append(scaling_row("3-RPR", RPR, precision, 1.0 / parts, 2))
-    head = ["mechanism", "eps", "leaves", "analyze s", "peak MiB", "regions",
-            "leaves*eps^(k-1)", "s*eps^(k-1)", "us/leaf"]  # fmt: skip
-    print(indent(table(head, rows)))
+    print(indent(table(SCALING_HEAD, rows)))
     print()
 
 
-def scaling_row(name: str, spec: Path, precision: Any, eps: float, power: int) -> list[str]:
-    shown = f"{eps:g}" if power == 1 else f"1/{round(1 / eps)}"
+SCALING_HEAD = ["mechanism", "eps", "leaves", "analyze s", "peak MiB", "regions",
+                "leaves*eps^(k-1)", "s*eps^(k-1)", "us/leaf"]  # fmt: skip
+#: the other mechanisms of the examples: (name, spec, precision, pose axes)
+OTHERS = [
+    ("biglide", EXAMPLES / "biglide.toml", 0.01, 2),
+    ("custom five-bar", CUSTOM, 0.02, 2),
+    ("Delta", EXAMPLES / "delta.toml", 0.03, 3),
+    ("3-RRR", EXAMPLES / "three-rrr.toml", 0.2, 3),
+]
+
+
+def case_others(scale: float) -> None:
+    print("6. the other mechanisms of the examples, analyze (fresh process each; eps the")
+    print("   precision, in the pose's units)")
+    rows = [
+        scaling_row(name, spec, eps * scale, eps * scale, dims - 1, fraction=False)
+        for name, spec, eps, dims in OTHERS
+    ]
+    print(indent(table(SCALING_HEAD, rows)))
+    print()
+
+
+def scaling_row(
+    name: str, spec: Path, precision: Any, eps: float, power: int, fraction: bool = True
+) -> list[str]:
+    shown = f"{eps:g}" if power == 1 or not fraction else f"1/{round(1 / eps)}"
     try:
         r = run_analysis_case(spec, precision)
     except RuntimeError as error:
@@ -652,6 +677,7 @@ def main() -> None:
     case_custom(custom_eps)
     case_startup(n_start)
     case_scaling(five_bar, parts)
+    case_others(4.0 if args.quick else 1.0)
     print(f"total {time.perf_counter() - start:.0f} s")
 
 
