@@ -431,6 +431,8 @@ class ConstraintLeg:
         counts = np.zeros(n, dtype=np.int64)
         done = []
         box: NDArray[np.int64] | None = None  # level 0: each box with every initial piece
+        # the derived inputs of pose coordinates (sin(phi), ...): once per box
+        pose = tape.pose_values(prog, lo, hi)
         for level in range(self.depth + 1):
             if level:
                 if not box.size:  # type: ignore[union-attr]
@@ -438,7 +440,7 @@ class ConstraintLeg:
                 extra = tape.derived_values(prog, Interval(q_lo, q_hi))
             *final, box, q_lo, q_hi = tape.isolate_level(
                 prog, lo, hi, box, (q_lo, q_hi), extra, counts, self.max_pieces,
-                level < self.depth,
+                level < self.depth, pose,
             )  # fmt: skip
             done.append(final)
         pieces = _Pieces(*(np.concatenate(parts) for parts in zip(*done, strict=True)))
