@@ -402,16 +402,17 @@ def run(tape: Tape, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
     # derived inputs of pose coordinates alone: over the boxes ``box`` refers to,
     # each once (the functions work element by element: the same bounds), then
     # taken per element
-    distinct: tuple[list[Interval], NDArray[np.int64]] | None = None
+    distinct: tuple[dict[int, Interval], NDArray[np.int64]] | None = None
     for e, (function, args) in enumerate(tape.derived):
         if args and all(a < tape.k for a in args):
             if distinct is None:
-                distinct = _distinct_boxes(lo_c, hi_c, box_i)
+                axes = {a for _, a_s in tape.derived if all(x < tape.k for x in a_s) for a in a_s}
+                distinct = _distinct_boxes(lo_c, hi_c, box_i, sorted(axes))
             with np.errstate(all="ignore"):
                 v = function(*(distinct[0][a] for a in args))
             if not isinstance(v, Interval):
                 v = Interval(v)
-            rows = distinct[0][0].lo.shape[0] if distinct[0] else 0
+            rows = distinct[0][args[0]].lo.shape[0]
             extra_lo[e] = np.broadcast_to(v.lo, (rows,))[distinct[1]]
             extra_hi[e] = np.broadcast_to(v.hi, (rows,))[distinct[1]]
             continue
@@ -452,10 +453,10 @@ def run(tape: Tape, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
 
 
 def _distinct_boxes(
-    lo: Array, hi: Array, box: NDArray[np.int64]
-) -> tuple[list[Interval], NDArray[np.int64]]:
-    """The pose coordinates (as intervals) of the rows ``box`` refers to, in row
-    order, and the position of each element's row among them."""
+    lo: Array, hi: Array, box: NDArray[np.int64], axes: Sequence[int]
+) -> tuple[dict[int, Interval], NDArray[np.int64]]:
+    """The pose coordinates ``axes`` (as intervals) of the rows ``box`` refers to,
+    in row order, and the position of each element's row among them."""
     n = lo.shape[0]
     mark = np.zeros(n, dtype=bool)
     mark[box] = True
@@ -466,7 +467,7 @@ def _distinct_boxes(
         at = np.empty(n, dtype=np.int64)
         at[rows] = np.arange(rows.size)
         where = at[box]
-    return [Interval(lo[rows, j], hi[rows, j]) for j in range(lo.shape[1])], where
+    return {j: Interval(lo[rows, j], hi[rows, j]) for j in axes}, where
 
 
 def trace_all(functions: Sequence[Callable[..., Any]], k: int) -> list[Tape | None]:
@@ -481,20 +482,23 @@ def trace_all(functions: Sequence[Callable[..., Any]], k: int) -> list[Tape | No
 
 
 # --------------------------------------------------------------- contraction
-_SIN, _COS = 0, 1
+_SIN, _COS, _POSE = 0, 1, 2
 
 
 def trig_kinds(tape: Tape) -> NDArray[np.int64] | None:
     """Per derived input, 0 for ``sin(q)`` and 1 for ``cos(q)`` of the joint (the
-    functions of :mod:`~moveability.mechanisms.expressions`); None if the tape has
-    any other derived input (:func:`contract` then does not apply)."""
+    functions of :mod:`~moveability.mechanisms.expressions`), 2 for a function of
+    pose coordinates alone (computed once per box by :func:`contract`); None if
+    the tape has any other derived input (:func:`contract` then does not apply)."""
     from . import expressions as ex
 
     kinds = []
     for function, args in tape.derived:
-        if args != (tape.k,):
+        if args and all(0 <= a < tape.k for a in args):
+            kinds.append(_POSE)
+        elif args != (tape.k,):
             return None
-        if function is ex.sin:
+        elif function is ex.sin:
             kinds.append(_SIN)
         elif function is ex.cos:
             kinds.append(_COS)
@@ -510,6 +514,8 @@ def _contract(
     const_hi: Array,
     k: int,
     kinds: NDArray[np.int64],
+    pose_lo: Array,
+    pose_hi: Array,
     slots: int,
     out: int,
     lo: Array,
@@ -525,7 +531,8 @@ def _contract(
 ) -> None:  # pragma: no cover - compiled
     """The bisection of ``ConstraintLeg._contract`` on F's sign, every iteration
     over the runs still active, the tape evaluated at ``[m, m]`` (its sines and
-    cosines by ``intervals.point_sin_cos``): the same steps on the same floats."""
+    cosines by ``intervals.point_sin_cos``, its derived inputs of the pose
+    ``pose_lo[x, box]``): the same steps on the same floats."""
     block = _BLOCK
     r_lo = np.empty((slots, block))
     r_hi = np.empty((slots, block))
@@ -581,6 +588,10 @@ def _contract(
                     for j in range(k):
                         r_lo[j, e] = lo[b, j]
                         r_hi[j, e] = hi[b, j]
+                    for x in range(n_extra):
+                        if kinds[x] == 2:
+                            r_lo[k + 1 + x, e] = pose_lo[x, b]
+                            r_hi[k + 1 + x, e] = pose_hi[x, b]
             for e in range(cols):
                 p = point[e]
                 r_lo[k, e] = p
@@ -591,7 +602,7 @@ def _contract(
                         if kinds[x] == 0:
                             r_lo[k + 1 + x, e] = s_lo
                             r_hi[k + 1 + x, e] = s_hi
-                        else:
+                        elif kinds[x] == 1:
                             r_lo[k + 1 + x, e] = c_lo
                             r_hi[k + 1 + x, e] = c_hi
             _ops(code, r_lo, r_hi, cols)
@@ -635,16 +646,28 @@ def contract(
     most; returns the lower and upper bounds. ``kinds`` from :func:`trig_kinds`."""
     below_a, below_b = (np.array(v, dtype=np.float64) for v in below)
     above_a, above_b = (np.array(v, dtype=np.float64) for v in above)
+    lo_c = np.ascontiguousarray(lo, dtype=np.float64)
+    hi_c = np.ascontiguousarray(hi, dtype=np.float64)
+    # the derived inputs of the pose over every box, once (rows of the others unused)
+    pose_lo = np.zeros((kinds.size, lo_c.shape[0]))
+    pose_hi = np.zeros((kinds.size, lo_c.shape[0]))
+    on_pose = [x for x in range(kinds.size) if kinds[x] == _POSE]
+    if on_pose:
+        v_lo, v_hi = _pose_derived_values([tape.derived[x] for x in on_pose], lo_c, hi_c)
+        pose_lo[on_pose] = v_lo
+        pose_hi[on_pose] = v_hi
     _contract(
         tape.code,
         tape.const_lo,
         tape.const_hi,
         tape.k,
         kinds,
+        pose_lo,
+        pose_hi,
         tape.slots,
         tape.out,
-        np.ascontiguousarray(lo, dtype=np.float64),
-        np.ascontiguousarray(hi, dtype=np.float64),
+        lo_c,
+        hi_c,
         np.ascontiguousarray(box, dtype=np.int64),
         np.ascontiguousarray(sign, dtype=np.float64),
         below_a,
@@ -820,7 +843,7 @@ def pose_values(prog: Program, lo: Array, hi: Array) -> tuple[Array, Array, Arra
     >>> p = program([trace(lambda x, q: x * cos(x) + q, 1)])
     >>> lo, hi = np.array([[0.0], [1.0]]), np.array([[0.5], [3.0]])
     >>> b_lo, b_hi, c_lo, c_hi = pose_values(p, lo, hi)
-    >>> b_hi[0, 0] == 1.0 and c_lo[0, 1] < np.cos(2.0) < c_hi[0, 1]
+    >>> bool(b_hi[0, 0] == 1.0 and c_lo[0, 1] < np.cos(2.0) < c_hi[0, 1])
     True
     """
     lo_c = np.ascontiguousarray(lo, dtype=np.float64)
