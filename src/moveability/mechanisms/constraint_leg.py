@@ -558,6 +558,11 @@ class ConstraintLeg:
         """Reach code, branch enclosures and fold certificates over boxes ``[lo, hi]`` (n, k)."""
         lo = np.asarray(lo, dtype=np.float64)
         hi = np.asarray(hi, dtype=np.float64)
+        # derived inputs of the pose (sin and cos of an angle, ...) once per box
+        with tape.remembered_boxes():
+            return self._reach(lo, hi)
+
+    def _reach(self, lo: Array, hi: Array) -> LegReach:
         n = lo.shape[0]
         pieces = self._isolate(lo, hi)
         runs = self._runs(pieces, n)

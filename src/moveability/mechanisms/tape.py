@@ -37,7 +37,9 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import Any
 
@@ -403,7 +405,14 @@ def run(tape: Tape, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
     # each once (the functions work element by element: the same bounds), then
     # taken per element
     distinct: tuple[dict[int, Interval], NDArray[np.int64]] | None = None
+    memo = _ROWS.get()
     for e, (function, args) in enumerate(tape.derived):
+        if memo is not None and args and all(a < tape.k for a in args):
+            # within remembered_boxes: over every box of these arrays, once
+            v_lo, v_hi = _rows_values(memo, function, args, lo, hi, lo_c, hi_c)
+            extra_lo[e] = v_lo[box_i]
+            extra_hi[e] = v_hi[box_i]
+            continue
         if args and all(a < tape.k for a in args):
             if distinct is None:
                 axes = {a for _, a_s in tape.derived if all(x < tape.k for x in a_s) for a in a_s}
@@ -450,6 +459,45 @@ def run(tape: Tape, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
         out_hi,
     )
     return Interval(out_lo, out_hi)
+
+
+#: derived inputs of the pose over every row of (lo, hi) array objects, within
+#: :func:`remembered_boxes`: (function, args, lo, hi) -> (lo, hi, values' bounds)
+_ROWS: ContextVar[dict[tuple[int, tuple[int, ...], int, int], tuple[Any, ...]] | None] = (
+    ContextVar("_ROWS", default=None)
+)
+
+
+@contextmanager
+def remembered_boxes() -> Iterator[None]:
+    """Within the block, the derived inputs of pose coordinates alone that
+    :func:`run` meets are computed once per function and pair of box arrays
+    ``lo, hi`` (the same objects; they must not change inside the block), over
+    all their rows (the same bounds: the functions work element by element)."""
+    token = _ROWS.set({} if _ROWS.get() is None else _ROWS.get())
+    try:
+        yield
+    finally:
+        _ROWS.reset(token)
+
+
+def _rows_values(
+    memo: dict[tuple[int, tuple[int, ...], int, int], tuple[Any, ...]],
+    function: Callable[..., Any],
+    args: tuple[int, ...],
+    lo: Any,
+    hi: Any,
+    lo_c: Array,
+    hi_c: Array,
+) -> tuple[Array, Array]:
+    """``function`` of the coordinates ``args`` over every row of ``[lo, hi]``, remembered."""
+    key = (id(function), args, id(lo), id(hi))
+    hit = memo.get(key)
+    if hit is None or hit[0] is not function or hit[1] is not lo or hit[2] is not hi:
+        v_lo, v_hi = _pose_derived_values([(function, args)], lo_c, hi_c)
+        hit = (function, lo, hi, v_lo[0], v_hi[0])  # (the objects kept: ids not reused)
+        memo[key] = hit
+    return hit[3], hit[4]
 
 
 def _distinct_boxes(
@@ -651,11 +699,14 @@ def contract(
     # the derived inputs of the pose over every box, once (rows of the others unused)
     pose_lo = np.zeros((kinds.size, lo_c.shape[0]))
     pose_hi = np.zeros((kinds.size, lo_c.shape[0]))
-    on_pose = [x for x in range(kinds.size) if kinds[x] == _POSE]
-    if on_pose:
-        v_lo, v_hi = _pose_derived_values([tape.derived[x] for x in on_pose], lo_c, hi_c)
-        pose_lo[on_pose] = v_lo
-        pose_hi[on_pose] = v_hi
+    memo = _ROWS.get()
+    for x in range(kinds.size):
+        if kinds[x] == _POSE:
+            if memo is None:
+                v_lo, v_hi = _pose_derived_values([tape.derived[x]], lo_c, hi_c)
+                pose_lo[x], pose_hi[x] = v_lo[0], v_hi[0]
+            else:
+                pose_lo[x], pose_hi[x] = _rows_values(memo, *tape.derived[x], lo, hi, lo_c, hi_c)
     _contract(
         tape.code,
         tape.const_lo,
@@ -850,7 +901,15 @@ def pose_values(prog: Program, lo: Array, hi: Array) -> tuple[Array, Array, Arra
     hi_c = np.ascontiguousarray(hi, dtype=np.float64)
     centre = 0.5 * (lo_c + hi_c)
     with np.errstate(all="ignore"):
-        box = _pose_derived_values(prog.pose_derived, lo_c, hi_c)
+        memo = _ROWS.get()
+        if memo is None:
+            box = _pose_derived_values(prog.pose_derived, lo_c, hi_c)
+        else:
+            rows = [_rows_values(memo, f, a, lo, hi, lo_c, hi_c) for f, a in prog.pose_derived]
+            box = (
+                np.array([r[0] for r in rows]).reshape(-1, lo_c.shape[0]),
+                np.array([r[1] for r in rows]).reshape(-1, lo_c.shape[0]),
+            )
         mid = _pose_derived_values(prog.pose_derived, centre, centre)
     return box[0], box[1], mid[0], mid[1]
 
