@@ -463,9 +463,7 @@ def run(tape: Tape, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
 
 #: derived inputs of the pose over every row of (lo, hi) array objects, within
 #: :func:`remembered_boxes`: (function, args, lo, hi) -> (lo, hi, values' bounds)
-_ROWS: ContextVar[dict[tuple[int, tuple[int, ...], int, int], tuple[Any, ...]] | None] = (
-    ContextVar("_ROWS", default=None)
-)
+_ROWS: ContextVar[dict[Any, tuple[Any, ...]] | None] = ContextVar("_ROWS", default=None)
 
 
 @contextmanager
@@ -482,7 +480,7 @@ def remembered_boxes() -> Iterator[None]:
 
 
 def _rows_values(
-    memo: dict[tuple[int, tuple[int, ...], int, int], tuple[Any, ...]],
+    memo: dict[Any, tuple[Any, ...]],
     function: Callable[..., Any],
     args: tuple[int, ...],
     lo: Any,
@@ -490,14 +488,58 @@ def _rows_values(
     lo_c: Array,
     hi_c: Array,
 ) -> tuple[Array, Array]:
-    """``function`` of the coordinates ``args`` over every row of ``[lo, hi]``, remembered."""
+    """``function`` of the coordinates ``args`` over every row of ``[lo, hi]``,
+    remembered; the coordinates are shared by the functions of one pair ``lo, hi``
+    (points when ``lo is hi``: their sine and cosine computed together)."""
     key = (id(function), args, id(lo), id(hi))
     hit = memo.get(key)
     if hit is None or hit[0] is not function or hit[1] is not lo or hit[2] is not hi:
-        v_lo, v_hi = _pose_derived_values([(function, args)], lo_c, hi_c)
+        c_key = ("coords", id(lo), id(hi))
+        found = memo.get(c_key)
+        if found is None or found[0] is not lo or found[1] is not hi:
+            found = (lo, hi, _Coords(lo_c, hi_c, lo is hi))
+            memo[c_key] = found
+        v_lo, v_hi = _values([(function, args)], found[2])
         hit = (function, lo, hi, v_lo[0], v_hi[0])  # (the objects kept: ids not reused)
         memo[key] = hit
     return hit[3], hit[4]
+
+
+class _Coords:
+    """The pose coordinates of the rows of ``[lo, hi]`` as Intervals, each built
+    once; :func:`~moveability.mechanisms.expressions.points` where ``points``
+    (``lo`` and ``hi`` the same values), whose sines and cosines are those of
+    the degenerate intervals, computed together."""
+
+    def __init__(self, lo: Array, hi: Array, points: bool) -> None:
+        self.lo, self.hi, self.points = lo, hi, points
+        self.done: dict[int, Interval] = {}
+
+    def __getitem__(self, a: int) -> Interval:
+        if a not in self.done:
+            from . import expressions as ex
+
+            x = self.lo[:, a]
+            self.done[a] = ex.points(x) if self.points else Interval(x, self.hi[:, a])
+        value: Interval = self.done[a]
+        return value
+
+
+def _values(
+    functions: Sequence[tuple[Callable[..., Any], tuple[int, ...]]], coords: _Coords
+) -> tuple[Array, Array]:
+    """``functions`` of the coordinates ``coords``: arrays of shape ``(d, n)``."""
+    n = coords.lo.shape[0]
+    out_lo = np.empty((len(functions), n))
+    out_hi = np.empty((len(functions), n))
+    for e, (function, args) in enumerate(functions):
+        with np.errstate(all="ignore"):
+            v = function(*(coords[a] for a in args))
+        if not isinstance(v, Interval):
+            v = Interval(v)
+        out_lo[e] = v.lo  # a copy (broadcast where v is one interval)
+        out_hi[e] = v.hi
+    return out_lo, out_hi
 
 
 def _distinct_boxes(
@@ -910,7 +952,8 @@ def pose_values(prog: Program, lo: Array, hi: Array) -> tuple[Array, Array, Arra
                 np.array([r[0] for r in rows]).reshape(-1, lo_c.shape[0]),
                 np.array([r[1] for r in rows]).reshape(-1, lo_c.shape[0]),
             )
-        mid = _pose_derived_values(prog.pose_derived, centre, centre)
+        # (the centres as points: one sine and one cosine each, the same bounds)
+        mid = _values(prog.pose_derived, _Coords(centre, centre, True))
     return box[0], box[1], mid[0], mid[1]
 
 
