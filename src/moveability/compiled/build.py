@@ -92,7 +92,10 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         (array(I8, 2), R1, R1, I8, R2, R2, array(I8), R1, R1, R2, R2, I8, I8, W1, W1)
     ],
     "moveability.mechanisms.tape._contract": [
-        (array(I8, 2), R1, R1, I8, array(I8), I8, I8, R2, R2, array(I8), R1, W1, W1, W1, W1, I8, F8)
+        (
+            array(I8, 2), R1, R1, I8, array(I8), R2, R2, I8, I8, R2, R2, array(I8), R1, W1, W1,
+            W1, W1, I8, F8,
+        )
     ],
     "moveability.mechanisms.expressions._point_trig": [(R1,)],
     "moveability.mechanisms._rpr_kernels.det_a_bounds": [(R2, R2, R2, R2, W1, W1)],
@@ -177,7 +180,7 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.mechanisms.tape._isolate_level": [
         (
             array(I8, 2), R1, R1, I8, I8, array(I8, 2), array(I8), array(I8, 2), array(I8), R2,
-            R2, array(I8), I8, R1, R1, R2, R2, array(I8, out=True), I8, B1,
+            R2, array(I8), I8, R1, R1, R2, R2, R2, R2, R2, R2, array(I8, out=True), I8, B1,
         )
     ],
     "moveability.mechanisms.tape._merge_order": [(array(I8), R1, array(I8))],

@@ -431,6 +431,8 @@ class ConstraintLeg:
         counts = np.zeros(n, dtype=np.int64)
         done = []
         box: NDArray[np.int64] | None = None  # level 0: each box with every initial piece
+        # the derived inputs of pose coordinates (sin(phi), ...): once per box
+        pose = tape.pose_values(prog, lo, hi)
         for level in range(self.depth + 1):
             if level:
                 if not box.size:  # type: ignore[union-attr]
@@ -438,7 +440,7 @@ class ConstraintLeg:
                 extra = tape.derived_values(prog, Interval(q_lo, q_hi))
             *final, box, q_lo, q_hi = tape.isolate_level(
                 prog, lo, hi, box, (q_lo, q_hi), extra, counts, self.max_pieces,
-                level < self.depth,
+                level < self.depth, pose,
             )  # fmt: skip
             done.append(final)
         pieces = _Pieces(*(np.concatenate(parts) for parts in zip(*done, strict=True)))
@@ -556,6 +558,11 @@ class ConstraintLeg:
         """Reach code, branch enclosures and fold certificates over boxes ``[lo, hi]`` (n, k)."""
         lo = np.asarray(lo, dtype=np.float64)
         hi = np.asarray(hi, dtype=np.float64)
+        # derived inputs of the pose (sin and cos of an angle, ...) once per box
+        with tape.remembered_boxes():
+            return self._reach(lo, hi)
+
+    def _reach(self, lo: Array, hi: Array) -> LegReach:
         n = lo.shape[0]
         pieces = self._isolate(lo, hi)
         runs = self._runs(pieces, n)
@@ -725,13 +732,23 @@ class ConstraintLeg:
         n_corners = 1 << k
         g_min = np.full((n_corners, n_b), np.inf)
         g_low = np.full((n_corners, n_b), np.inf)
-        for corner in range(n_corners):
-            pick = np.array([(corner >> j) & 1 for j in range(k)], dtype=bool)
-            point = np.where(pick, hi[p_box], lo[p_box])
-            with _quiet():
-                vals = [s2p * self.constraint(point, v) for v in (q.lo, q.mid, q.hi)]
-            np.minimum.at(g_min[corner], p_local, vals[1])
-            np.minimum.at(g_low[corner], p_local, np.minimum(np.minimum(vals[0], vals[1]), vals[2]))
+        lo_p, hi_p = lo[p_box], hi[p_box]
+        # each corner's coordinates (one array object per axis and end, laid out as
+        # the columns of the corner's points were) and the three joint values: their
+        # sines and cosines computed once (ex.remembered)
+        columns = [[e[:, j] for e in (lo_p, hi_p)] for j in range(k)]
+        q_float = [np.asarray(v, dtype=np.float64) for v in (q.lo, q.mid, q.hi)]
+        with ex.remembered():
+            for corner in range(n_corners):
+                coords = [columns[j][(corner >> j) & 1] for j in range(k)]
+                with _quiet():
+                    vals = [
+                        s2p * np.asarray(self.f(*coords, v), dtype=np.float64) for v in q_float
+                    ]
+                np.minimum.at(g_min[corner], p_local, vals[1])
+                np.minimum.at(
+                    g_low[corner], p_local, np.minimum(np.minimum(vals[0], vals[1]), vals[2])
+                )
         g_min = np.where(np.isnan(g_min), np.inf, g_min)
         g_low = np.where(np.isnan(g_low), -np.inf, g_low)
         best_in = np.argmin(g_min, axis=0)
@@ -739,8 +756,8 @@ class ConstraintLeg:
         bits = (1 << np.arange(k))[None, :]
         pick_in = (best_in[p_local][:, None] & bits) > 0
         pick_out = (best_out[p_local][:, None] & bits) > 0
-        point_in = np.where(pick_in, hi[p_box], lo[p_box])
-        point_out = np.where(pick_out, hi[p_box], lo[p_box])
+        point_in = np.where(pick_in, hi_p, lo_p)
+        point_out = np.where(pick_out, hi_p, lo_p)
         g_mid = g_at(point_in, point_in, q_mid)
         ok &= np.bincount(p_local, weights=g_mid.hi < 0, minlength=n_b) > 0  # reachable
         # the steps below only for the boxes still passing (the others fail anyway)

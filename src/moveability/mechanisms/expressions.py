@@ -25,7 +25,9 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from typing import Any
 
 import numpy as np
@@ -46,6 +48,7 @@ __all__ = [
     "log",
     "points",
     "power",
+    "remembered",
     "sin",
     "sqrt",
     "take",
@@ -164,14 +167,53 @@ def take(x: Interval, index: Any) -> Interval:
     return out
 
 
+#: float arrays' sines and cosines remembered within :func:`remembered`
+_FLOATS: ContextVar[dict[tuple[str, int], tuple[Any, Array]] | None] = ContextVar(
+    "_FLOATS", default=None
+)
+
+
+@contextmanager
+def remembered() -> Iterator[None]:
+    """Within the block, :func:`sin` and :func:`cos` of one float array object are
+    computed once (each call gets a copy: the same values as ``np.sin``). The
+    arrays must not change inside the block.
+
+    Examples
+    --------
+    >>> x = np.array([0.5, 3.0])
+    >>> with remembered():
+    ...     a, b = sin(x), sin(x)
+    >>> bool((a == np.sin(x)).all() and (b == a).all() and a is not b)
+    True
+    """
+    token = _FLOATS.set({} if _FLOATS.get() is None else _FLOATS.get())
+    try:
+        yield
+    finally:
+        _FLOATS.reset(token)
+
+
+def _float(name: str, f: Callable[[Any], Any], x: Any) -> Any:
+    memo = _FLOATS.get()
+    if memo is None or type(x) is not np.ndarray:
+        return f(x)
+    key = (name, id(x))
+    hit = memo.get(key)
+    if hit is None or hit[0] is not x:
+        hit = (x, f(x))
+        memo[key] = hit  # (x kept alive: its id is not reused meanwhile)
+    return hit[1].copy()
+
+
 def sin(x: Any) -> Any:
     """Sine (over an interval, computed once per interval object)."""
-    return _once("sin", x, iv.sin) if isinstance(x, Interval) else np.sin(x)
+    return _once("sin", x, iv.sin) if isinstance(x, Interval) else _float("sin", np.sin, x)
 
 
 def cos(x: Any) -> Any:
     """Cosine (over an interval, computed once per interval object)."""
-    return _once("cos", x, iv.cos) if isinstance(x, Interval) else np.cos(x)
+    return _once("cos", x, iv.cos) if isinstance(x, Interval) else _float("cos", np.cos, x)
 
 
 def tan(x: Any) -> Any:

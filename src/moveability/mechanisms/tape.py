@@ -37,7 +37,9 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import Any
 
@@ -399,7 +401,30 @@ def run(tape: Tape, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
     extra_lo = np.empty((len(tape.derived), m))
     extra_hi = np.empty((len(tape.derived), m))
     coords: list[Interval] | None = None
+    # derived inputs of pose coordinates alone: over the boxes ``box`` refers to,
+    # each once (the functions work element by element: the same bounds), then
+    # taken per element
+    distinct: tuple[dict[int, Interval], NDArray[np.int64]] | None = None
+    memo = _ROWS.get()
     for e, (function, args) in enumerate(tape.derived):
+        if memo is not None and args and all(a < tape.k for a in args):
+            # within remembered_boxes: over every box of these arrays, once
+            v_lo, v_hi = _rows_values(memo, function, args, lo, hi, lo_c, hi_c)
+            extra_lo[e] = v_lo[box_i]
+            extra_hi[e] = v_hi[box_i]
+            continue
+        if args and all(a < tape.k for a in args):
+            if distinct is None:
+                axes = {a for _, a_s in tape.derived if all(x < tape.k for x in a_s) for a in a_s}
+                distinct = _distinct_boxes(lo_c, hi_c, box_i, sorted(axes))
+            with np.errstate(all="ignore"):
+                v = function(*(distinct[0][a] for a in args))
+            if not isinstance(v, Interval):
+                v = Interval(v)
+            rows = distinct[0][args[0]].lo.shape[0]
+            extra_lo[e] = np.broadcast_to(v.lo, (rows,))[distinct[1]]
+            extra_hi[e] = np.broadcast_to(v.hi, (rows,))[distinct[1]]
+            continue
         values: list[Interval] = []
         for a in args:
             if a == tape.k:
@@ -436,6 +461,105 @@ def run(tape: Tape, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
     return Interval(out_lo, out_hi)
 
 
+#: derived inputs of the pose over every row of (lo, hi) array objects, within
+#: :func:`remembered_boxes`: (function, args, lo, hi) -> (lo, hi, values' bounds)
+_ROWS: ContextVar[dict[Any, tuple[Any, ...]] | None] = ContextVar("_ROWS", default=None)
+
+
+@contextmanager
+def remembered_boxes() -> Iterator[None]:
+    """Within the block, the derived inputs of pose coordinates alone that
+    :func:`run` meets are computed once per function and pair of box arrays
+    ``lo, hi`` (the same objects; they must not change inside the block), over
+    all their rows (the same bounds: the functions work element by element)."""
+    token = _ROWS.set({} if _ROWS.get() is None else _ROWS.get())
+    try:
+        yield
+    finally:
+        _ROWS.reset(token)
+
+
+def _rows_values(
+    memo: dict[Any, tuple[Any, ...]],
+    function: Callable[..., Any],
+    args: tuple[int, ...],
+    lo: Any,
+    hi: Any,
+    lo_c: Array,
+    hi_c: Array,
+) -> tuple[Array, Array]:
+    """``function`` of the coordinates ``args`` over every row of ``[lo, hi]``,
+    remembered; the coordinates are shared by the functions of one pair ``lo, hi``
+    (points when ``lo is hi``: their sine and cosine computed together)."""
+    key = (id(function), args, id(lo), id(hi))
+    hit = memo.get(key)
+    if hit is None or hit[0] is not function or hit[1] is not lo or hit[2] is not hi:
+        c_key = ("coords", id(lo), id(hi))
+        found = memo.get(c_key)
+        if found is None or found[0] is not lo or found[1] is not hi:
+            found = (lo, hi, _Coords(lo_c, hi_c, lo is hi))
+            memo[c_key] = found
+        v_lo, v_hi = _values([(function, args)], found[2])
+        hit = (function, lo, hi, v_lo[0], v_hi[0])  # (the objects kept: ids not reused)
+        memo[key] = hit
+    return hit[3], hit[4]
+
+
+class _Coords:
+    """The pose coordinates of the rows of ``[lo, hi]`` as Intervals, each built
+    once; :func:`~moveability.mechanisms.expressions.points` where ``points``
+    (``lo`` and ``hi`` the same values), whose sines and cosines are those of
+    the degenerate intervals, computed together."""
+
+    def __init__(self, lo: Array, hi: Array, points: bool) -> None:
+        self.lo, self.hi, self.points = lo, hi, points
+        self.done: dict[int, Interval] = {}
+
+    def __getitem__(self, a: int) -> Interval:
+        if a not in self.done:
+            from . import expressions as ex
+
+            x = self.lo[:, a]
+            self.done[a] = ex.points(x) if self.points else Interval(x, self.hi[:, a])
+        value: Interval = self.done[a]
+        return value
+
+
+def _values(
+    functions: Sequence[tuple[Callable[..., Any], tuple[int, ...]]], coords: _Coords
+) -> tuple[Array, Array]:
+    """``functions`` of the coordinates ``coords``: arrays of shape ``(d, n)``."""
+    n = coords.lo.shape[0]
+    out_lo = np.empty((len(functions), n))
+    out_hi = np.empty((len(functions), n))
+    for e, (function, args) in enumerate(functions):
+        with np.errstate(all="ignore"):
+            v = function(*(coords[a] for a in args))
+        if not isinstance(v, Interval):
+            v = Interval(v)
+        out_lo[e] = v.lo  # a copy (broadcast where v is one interval)
+        out_hi[e] = v.hi
+    return out_lo, out_hi
+
+
+def _distinct_boxes(
+    lo: Array, hi: Array, box: NDArray[np.int64], axes: Sequence[int]
+) -> tuple[dict[int, Interval], NDArray[np.int64]]:
+    """The pose coordinates ``axes`` (as intervals) of the rows ``box`` refers to,
+    in row order, and the position of each element's row among them."""
+    n = lo.shape[0]
+    mark = np.zeros(n, dtype=bool)
+    mark[box] = True
+    rows = np.flatnonzero(mark)
+    if rows.size == n:
+        where = box
+    else:
+        at = np.empty(n, dtype=np.int64)
+        at[rows] = np.arange(rows.size)
+        where = at[box]
+    return {j: Interval(lo[rows, j], hi[rows, j]) for j in axes}, where
+
+
 def trace_all(functions: Sequence[Callable[..., Any]], k: int) -> list[Tape | None]:
     """:func:`trace` of each function, None where it is :class:`Untraceable`."""
     out: list[Tape | None] = []
@@ -448,20 +572,23 @@ def trace_all(functions: Sequence[Callable[..., Any]], k: int) -> list[Tape | No
 
 
 # --------------------------------------------------------------- contraction
-_SIN, _COS = 0, 1
+_SIN, _COS, _POSE = 0, 1, 2
 
 
 def trig_kinds(tape: Tape) -> NDArray[np.int64] | None:
     """Per derived input, 0 for ``sin(q)`` and 1 for ``cos(q)`` of the joint (the
-    functions of :mod:`~moveability.mechanisms.expressions`); None if the tape has
-    any other derived input (:func:`contract` then does not apply)."""
+    functions of :mod:`~moveability.mechanisms.expressions`), 2 for a function of
+    pose coordinates alone (computed once per box by :func:`contract`); None if
+    the tape has any other derived input (:func:`contract` then does not apply)."""
     from . import expressions as ex
 
     kinds = []
     for function, args in tape.derived:
-        if args != (tape.k,):
+        if args and all(0 <= a < tape.k for a in args):
+            kinds.append(_POSE)
+        elif args != (tape.k,):
             return None
-        if function is ex.sin:
+        elif function is ex.sin:
             kinds.append(_SIN)
         elif function is ex.cos:
             kinds.append(_COS)
@@ -477,6 +604,8 @@ def _contract(
     const_hi: Array,
     k: int,
     kinds: NDArray[np.int64],
+    pose_lo: Array,
+    pose_hi: Array,
     slots: int,
     out: int,
     lo: Array,
@@ -492,7 +621,8 @@ def _contract(
 ) -> None:  # pragma: no cover - compiled
     """The bisection of ``ConstraintLeg._contract`` on F's sign, every iteration
     over the runs still active, the tape evaluated at ``[m, m]`` (its sines and
-    cosines by ``intervals.point_sin_cos``): the same steps on the same floats."""
+    cosines by ``intervals.point_sin_cos``, its derived inputs of the pose
+    ``pose_lo[x, box]``): the same steps on the same floats."""
     block = _BLOCK
     r_lo = np.empty((slots, block))
     r_hi = np.empty((slots, block))
@@ -548,6 +678,10 @@ def _contract(
                     for j in range(k):
                         r_lo[j, e] = lo[b, j]
                         r_hi[j, e] = hi[b, j]
+                    for x in range(n_extra):
+                        if kinds[x] == 2:
+                            r_lo[k + 1 + x, e] = pose_lo[x, b]
+                            r_hi[k + 1 + x, e] = pose_hi[x, b]
             for e in range(cols):
                 p = point[e]
                 r_lo[k, e] = p
@@ -558,7 +692,7 @@ def _contract(
                         if kinds[x] == 0:
                             r_lo[k + 1 + x, e] = s_lo
                             r_hi[k + 1 + x, e] = s_hi
-                        else:
+                        elif kinds[x] == 1:
                             r_lo[k + 1 + x, e] = c_lo
                             r_hi[k + 1 + x, e] = c_hi
             _ops(code, r_lo, r_hi, cols)
@@ -602,16 +736,31 @@ def contract(
     most; returns the lower and upper bounds. ``kinds`` from :func:`trig_kinds`."""
     below_a, below_b = (np.array(v, dtype=np.float64) for v in below)
     above_a, above_b = (np.array(v, dtype=np.float64) for v in above)
+    lo_c = np.ascontiguousarray(lo, dtype=np.float64)
+    hi_c = np.ascontiguousarray(hi, dtype=np.float64)
+    # the derived inputs of the pose over every box, once (rows of the others unused)
+    pose_lo = np.zeros((kinds.size, lo_c.shape[0]))
+    pose_hi = np.zeros((kinds.size, lo_c.shape[0]))
+    memo = _ROWS.get()
+    for x in range(kinds.size):
+        if kinds[x] == _POSE:
+            if memo is None:
+                v_lo, v_hi = _pose_derived_values([tape.derived[x]], lo_c, hi_c)
+                pose_lo[x], pose_hi[x] = v_lo[0], v_hi[0]
+            else:
+                pose_lo[x], pose_hi[x] = _rows_values(memo, *tape.derived[x], lo, hi, lo_c, hi_c)
     _contract(
         tape.code,
         tape.const_lo,
         tape.const_hi,
         tape.k,
         kinds,
+        pose_lo,
+        pose_hi,
         tape.slots,
         tape.out,
-        np.ascontiguousarray(lo, dtype=np.float64),
-        np.ascontiguousarray(hi, dtype=np.float64),
+        lo_c,
+        hi_c,
         np.ascontiguousarray(box, dtype=np.int64),
         np.ascontiguousarray(sign, dtype=np.float64),
         below_a,
@@ -628,13 +777,15 @@ def contract(
 @dataclass(frozen=True, eq=False)
 class Program:
     """Tapes of one ``k`` over one register file: slots ``[0, k]`` the inputs, then
-    the derived inputs (all functions of the joint alone, ``derived``), the
-    constants of every tape, and their temporaries. Tape ``t``'s operations are
-    the rows ``ranges[t, 0]:ranges[t, 1]`` of ``code``, its value slot
-    ``outs[t]``."""
+    the derived inputs of the joint alone (``derived``), those of pose coordinates
+    alone (``pose_derived``: function and argument slots, computed once per box,
+    :func:`pose_values`), the constants of every tape, and their temporaries.
+    Tape ``t``'s operations are the rows ``ranges[t, 0]:ranges[t, 1]`` of
+    ``code``, its value slot ``outs[t]``."""
 
     k: int
     derived: tuple[Callable[..., Any], ...]
+    pose_derived: tuple[tuple[Callable[..., Any], tuple[int, ...]], ...]
     const_lo: Array
     const_hi: Array
     code: NDArray[np.int64]
@@ -652,8 +803,7 @@ class Program:
 
 def program(tapes: Sequence[Tape]) -> Program | None:
     """The tapes merged into one :class:`Program`, their derived inputs shared;
-    None if a derived input depends on a pose coordinate (its value then differs
-    between a box and its centre).
+    None if a derived input depends on both the joint and a pose coordinate.
 
     Examples
     --------
@@ -667,15 +817,21 @@ def program(tapes: Sequence[Tape]) -> Program | None:
         return None
     k = tapes[0].k
     derived: list[Callable[..., Any]] = []
+    pose_derived: list[tuple[Callable[..., Any], tuple[int, ...]]] = []
     for t in tapes:
         if t.k != k:
             return None
         for function, args in t.derived:
-            if args != (k,):
+            if args == (k,):
+                if not any(function is f for f in derived):
+                    derived.append(function)
+            elif args and all(0 <= a < k for a in args):
+                if not any(function is f and args == a for f, a in pose_derived):
+                    pose_derived.append((function, args))
+            else:
                 return None
-            if not any(function is f for f in derived):
-                derived.append(function)
-    first_const = k + 1 + len(derived)
+    first_pose = k + 1 + len(derived)
+    first_const = first_pose + len(pose_derived)
     n_const = sum(t.const_lo.size for t in tapes)
     const_at, temp_at = first_const, first_const + n_const
     codes, ranges, outs = [], [], []
@@ -683,7 +839,13 @@ def program(tapes: Sequence[Tape]) -> Program | None:
     for t in tapes:
         t_const = t.k + 1 + len(t.derived)
         t_temp = t_const + t.const_lo.size
-        shared = [next(i for i, f in enumerate(derived) if f is g) for g, _ in t.derived]
+        shared = [
+            next(i for i, f in enumerate(derived) if f is g)
+            if args == (k,)
+            else len(derived)
+            + next(i for i, (f, a) in enumerate(pose_derived) if f is g and a == args)
+            for g, args in t.derived
+        ]
         mapping = np.empty(t.slots, dtype=np.int64)
         mapping[: k + 1] = np.arange(k + 1)
         mapping[k + 1 : t_const] = k + 1 + np.array(shared, dtype=np.int64)
@@ -701,6 +863,7 @@ def program(tapes: Sequence[Tape]) -> Program | None:
     # an operation is fixed when no operand depends on a pose coordinate
     on_pose = np.zeros(temp_at, dtype=bool)
     on_pose[:k] = True
+    on_pose[first_pose:first_const] = True
     fixed = np.zeros(code.shape[0], dtype=bool)
     for row, (_, target, a, b) in enumerate(code):
         fixed[row] = not (on_pose[a] or on_pose[b])
@@ -710,6 +873,7 @@ def program(tapes: Sequence[Tape]) -> Program | None:
     return Program(
         k=k,
         derived=tuple(derived),
+        pose_derived=tuple(pose_derived),
         const_lo=np.ascontiguousarray(np.concatenate([t.const_lo for t in tapes])),
         const_hi=np.ascontiguousarray(np.concatenate([t.const_hi for t in tapes])),
         code=code,
@@ -739,6 +903,60 @@ def derived_values(prog: Program, q: Interval) -> tuple[Array, Array]:
     return out_lo, out_hi
 
 
+def _pose_derived_values(
+    functions: Sequence[tuple[Callable[..., Any], tuple[int, ...]]], lo: Array, hi: Array
+) -> tuple[Array, Array]:
+    """Derived inputs of pose coordinates over the boxes ``[lo, hi]`` (rows), each
+    computed as :func:`run` computes it on the same Interval operands: arrays of
+    shape ``(d, n)``."""
+    n = lo.shape[0]
+    out_lo = np.empty((len(functions), n))
+    out_hi = np.empty((len(functions), n))
+    for e, (function, args) in enumerate(functions):
+        with np.errstate(all="ignore"):
+            v = function(*(Interval(lo[:, a], hi[:, a]) for a in args))
+        if not isinstance(v, Interval):
+            v = Interval(v)
+        out_lo[e] = v.lo  # a copy (broadcast where v is one interval)
+        out_hi[e] = v.hi
+    return out_lo, out_hi
+
+
+def pose_values(prog: Program, lo: Array, hi: Array) -> tuple[Array, Array, Array, Array]:
+    """The derived inputs of pose coordinates of ``prog`` (``prog.pose_derived``)
+    over each box ``[lo, hi]`` (rows of ``(n, k)`` arrays) and at its centre
+    ``[c, c]``, ``c = 0.5 * (lo + hi)``, as :func:`run` computes them on those
+    boxes: four arrays of shape ``(d, n)`` (box lower and upper bounds, then
+    centre lower and upper bounds).
+
+    Examples
+    --------
+    >>> from moveability.mechanisms import expressions as ex
+    >>> cos = traced(ex.cos, "cos")
+    >>> p = program([trace(lambda x, q: x * cos(x) + q, 1)])
+    >>> lo, hi = np.array([[0.0], [1.0]]), np.array([[0.5], [3.0]])
+    >>> b_lo, b_hi, c_lo, c_hi = pose_values(p, lo, hi)
+    >>> bool(b_hi[0, 0] == 1.0 and c_lo[0, 1] < np.cos(2.0) < c_hi[0, 1])
+    True
+    """
+    lo_c = np.ascontiguousarray(lo, dtype=np.float64)
+    hi_c = np.ascontiguousarray(hi, dtype=np.float64)
+    centre = 0.5 * (lo_c + hi_c)
+    with np.errstate(all="ignore"):
+        memo = _ROWS.get()
+        if memo is None:
+            box = _pose_derived_values(prog.pose_derived, lo_c, hi_c)
+        else:
+            rows = [_rows_values(memo, f, a, lo, hi, lo_c, hi_c) for f, a in prog.pose_derived]
+            box = (
+                np.array([r[0] for r in rows]).reshape(-1, lo_c.shape[0]),
+                np.array([r[1] for r in rows]).reshape(-1, lo_c.shape[0]),
+            )
+        # (the centres as points: one sine and one cosine each, the same bounds)
+        mid = _values(prog.pose_derived, _Coords(centre, centre, True))
+    return box[0], box[1], mid[0], mid[1]
+
+
 @kernel(inline=True)
 def _fill(
     r_lo: Array,
@@ -753,9 +971,11 @@ def _fill(
     extra_lo: Array,
     extra_hi: Array,
     qis: NDArray[np.int64],
+    pose_lo: Array,
+    pose_hi: Array,
 ) -> None:  # pragma: no cover - compiled
-    """The inputs of register columns ``[0, n)``: pose box ``rows[e]``, joint
-    enclosure and derived inputs ``qis[e]``."""
+    """The inputs of register columns ``[0, n)``: pose box ``rows[e]`` and its
+    derived inputs, joint enclosure and its derived inputs ``qis[e]``."""
     for j in range(k):
         for e in range(n):
             r_lo[j, e] = x_lo[rows[e], j]
@@ -763,10 +983,15 @@ def _fill(
     for e in range(n):
         r_lo[k, e] = q_lo[qis[e]]
         r_hi[k, e] = q_hi[qis[e]]
-    for x in range(extra_lo.shape[0]):
+    n_extra = extra_lo.shape[0]
+    for x in range(n_extra):
         for e in range(n):
             r_lo[k + 1 + x, e] = extra_lo[x, qis[e]]
             r_hi[k + 1 + x, e] = extra_hi[x, qis[e]]
+    for x in range(pose_lo.shape[0]):
+        for e in range(n):
+            r_lo[k + 1 + n_extra + x, e] = pose_lo[x, rows[e]]
+            r_hi[k + 1 + n_extra + x, e] = pose_hi[x, rows[e]]
 
 
 @kernel
@@ -788,6 +1013,10 @@ def _isolate_level(
     q_hi: Array,
     extra_lo: Array,
     extra_hi: Array,
+    pose_lo: Array,
+    pose_hi: Array,
+    centre_lo: Array,
+    centre_hi: Array,
     counts: NDArray[np.int64],
     max_pieces: int,
     split: bool,
@@ -803,7 +1032,9 @@ def _isolate_level(
     block = _BLOCK
     r_lo = np.empty((slots, block))
     r_hi = np.empty((slots, block))
-    first_const = k + 1 + extra_lo.shape[0]
+    first_pose = k + 1 + extra_lo.shape[0]
+    n_pose = pose_lo.shape[0]
+    first_const = first_pose + n_pose
     for c in range(const_lo.size):
         for e in range(block):
             r_lo[first_const + c, e] = const_lo[c]
@@ -864,7 +1095,7 @@ def _isolate_level(
             else:
                 rows[e] = box[start + e]
                 qis[e] = start + e
-        _fill(r_lo, r_hi, n, k, lo, hi, rows, q_lo, q_hi, extra_lo, extra_hi, qis)
+        _fill(r_lo, r_hi, n, k, lo, hi, rows, q_lo, q_hi, extra_lo, extra_hi, qis, pose_lo, pose_hi)
         for x in range(n_fixed):
             slot = fixed_slots[x]
             for e in range(n):
@@ -888,7 +1119,10 @@ def _isolate_level(
         for t in range(c):
             near_rows[t] = rows[near[t]]
             near_qis[t] = qis[near[t]]
-        _fill(r_lo, r_hi, c, k, lo, hi, near_rows, q_lo, q_hi, extra_lo, extra_hi, near_qis)
+        _fill(
+            r_lo, r_hi, c, k, lo, hi, near_rows, q_lo, q_hi, extra_lo, extra_hi, near_qis,
+            pose_lo, pose_hi,
+        )  # fmt: skip
         for x in range(n_fixed):
             slot = fixed_slots[x]
             for t in range(c):
@@ -908,6 +1142,9 @@ def _isolate_level(
                 centre = 0.5 * (lo[b, j] + hi[b, j])
                 r_lo[j, t] = centre
                 r_hi[j, t] = centre
+            for x in range(n_pose):
+                r_lo[first_pose + x, t] = centre_lo[x, b]
+                r_hi[first_pose + x, t] = centre_hi[x, b]
         _ops(f_code, r_lo, r_hi, c)
         for t in range(c):
             e = near[t]
@@ -995,6 +1232,7 @@ def isolate_level(
     counts: NDArray[np.int64],
     max_pieces: int,
     split: bool,
+    pose: tuple[Array, Array, Array, Array] | None = None,
 ) -> tuple[Any, ...]:
     """One level of the root isolation of ``ConstraintLeg._isolate`` in one
     compiled loop, for the program of the tapes of ``F``, ``dF/dq`` and the
@@ -1009,11 +1247,15 @@ def isolate_level(
     those of ``counts`` (final ones of the levels before, updated here) and this
     level's kept ones. The same steps on the same floats as the interpreted level.
 
-    ``extra`` holds the derived inputs of ``q`` (:func:`derived_values`). With
-    ``box`` None the pieces are every box with each enclosure of ``q`` in turn.
+    ``extra`` holds the derived inputs of ``q`` (:func:`derived_values`), ``pose``
+    those of the pose coordinates over the boxes and at their centres
+    (:func:`pose_values`, computed here if None). With ``box`` None the pieces
+    are every box with each enclosure of ``q`` in turn.
     Returns the final pieces (box, lo, hi, sign, finite) and those of the next
     level (box, lo, hi).
     """
+    if pose is None:
+        pose = pose_values(prog, lo, hi)
     tile = 0 if box is not None else int(np.size(q[0]))
     box_i = np.zeros(0, dtype=np.int64) if box is None else box
     # every box with each q: the operations on q alone once per q
@@ -1040,6 +1282,10 @@ def isolate_level(
         np.ascontiguousarray(q[1], dtype=np.float64),
         np.ascontiguousarray(extra[0], dtype=np.float64),
         np.ascontiguousarray(extra[1], dtype=np.float64),
+        np.ascontiguousarray(pose[0], dtype=np.float64),
+        np.ascontiguousarray(pose[1], dtype=np.float64),
+        np.ascontiguousarray(pose[2], dtype=np.float64),
+        np.ascontiguousarray(pose[3], dtype=np.float64),
         counts,
         int(max_pieces),
         bool(split),
