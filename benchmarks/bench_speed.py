@@ -553,7 +553,9 @@ def case_custom(eps: float) -> None:
     print(f"3. user-defined five-bar vs built-in, analyze at precision {eps:g} (fresh processes)")
     built = run_analysis_case(PAPER, eps)
     with tempfile.TemporaryDirectory() as folder:
-        custom = run_analysis_case(custom_on_box(eps, folder), eps)
+        same_box = custom_on_box(eps, folder)
+        run_analysis_case(same_box, 0.5)  # its derivatives in the spec cache
+        custom = run_analysis_case(same_box, eps)
     rows = []
     for name, r in (("built-in five-bar", built), ("custom five-bar", custom)):
         area = r["workspace"]["area"]
