@@ -36,22 +36,31 @@ __all__ = [
     "add_into",
     "arccos",
     "arctan2",
+    "bound_above",
     "cos",
     "exp",
     "flat_arrays",
     "holds_angle",
     "hull",
     "interval_add",
+    "interval_div",
     "interval_mul",
+    "interval_sqrt",
+    "interval_square",
     "interval_sub",
+    "lib_above",
+    "lib_below",
     "log",
     "may_contain_angle",
     "move_below",
     "mul_into",
+    "nan_max",
+    "nan_min",
     "next_below",
     "point_sin_cos",
     "power",
     "rational",
+    "reciprocal",
     "sin",
     "slot_add",
     "slot_add_c",
@@ -775,6 +784,74 @@ def point_sin_cos(a: float) -> tuple[float, float, float, float]:  # pragma: no 
 #: the widening of the library functions' results, for compiled code
 _LIB_REL = _rel(_LIB_ULPS)
 _LIB_TINY = _LIB_ULPS * _TINY
+
+
+# one-element steps of the Interval operations, for the compiled code of the
+# mechanisms (inlined: the same floats as the Interval code)
+@kernel(inline=True)
+def bound_above(x: float) -> float:  # pragma: no cover - compiled
+    """An upper bound moved up by one ulp (or a few): ``-step_down(-x)``."""
+    return -_down(-x, False)
+
+
+@kernel(inline=True)
+def lib_below(x: float) -> float:  # pragma: no cover - compiled
+    """``widen_down(x, _LIB_ULPS)``: a library function's lower bound."""
+    return _below(x, _LIB_REL, _LIB_TINY, False)
+
+
+@kernel(inline=True)
+def lib_above(x: float) -> float:  # pragma: no cover - compiled
+    """``widen_up(x, _LIB_ULPS)``: a library function's upper bound."""
+    return -_below(-x, _LIB_REL, _LIB_TINY, False)
+
+
+@kernel(inline=True)
+def nan_max(a: float, b: float) -> float:  # pragma: no cover - compiled
+    """``np.maximum`` of two floats: NaN if either is, else ``a`` when ``a >= b``."""
+    return np.nan if ((a != a) | (b != b)) else (a if a >= b else b)
+
+
+@kernel(inline=True)
+def nan_min(a: float, b: float) -> float:  # pragma: no cover - compiled
+    """``np.minimum`` of two floats: NaN if either is, else ``a`` when ``a <= b``."""
+    return np.nan if ((a != a) | (b != b)) else (a if a <= b else b)
+
+
+@kernel(inline=True)
+def reciprocal(x: float) -> float:  # pragma: no cover - compiled
+    """``1.0 / x`` as numpy rounds it, an infinity of the zero's sign for a zero
+    (compiled code would raise)."""
+    return np.copysign(np.inf, x) if x == 0.0 else 1.0 / x
+
+
+@kernel(inline=True)
+def interval_div(
+    a_lo: float, a_hi: float, b_lo: float, b_hi: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``Interval.__truediv__``: the product with ``[1 / hi, 1 / lo]`` rounded
+    outwards, or with the whole line where the divisor may vanish."""
+    straddles = (b_lo <= 0) & (b_hi >= 0)
+    i_lo = -np.inf if straddles else _down(reciprocal(b_hi), False)
+    i_hi = np.inf if straddles else bound_above(reciprocal(b_lo))
+    return interval_mul(a_lo, a_hi, i_lo, i_hi)
+
+
+@kernel(inline=True)
+def interval_square(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover
+    """``square``: ``x * x``, from 0 where ``x`` straddles 0."""
+    s_lo, s_hi = interval_mul(lo, hi, lo, hi)
+    straddles = (lo <= 0) & (hi >= 0)
+    return (0.0 if straddles else nan_max(s_lo, 0.0)), s_hi
+
+
+@kernel(inline=True)
+def interval_sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover
+    """``sqrt``: the square root of the non-negative part; NaN above where there
+    is none."""
+    low = 0.0 if lo <= 0 else _down(np.sqrt(nan_max(lo, 0.0)), False)
+    high = np.nan if hi < 0 else bound_above(np.sqrt(nan_max(hi, 0.0)))
+    return nan_max(low, 0.0), high
 
 
 def arccos(x: IntervalLike) -> Interval:

@@ -46,9 +46,15 @@ from ..compiled import kernel
 from ..intervals import (
     Slot,
     interval_add,
+    interval_div,
     interval_mul,
+    interval_sqrt,
+    interval_square,
     interval_sub,
-    move_below,
+    lib_above,
+    lib_below,
+    nan_max,
+    nan_min,
     slot_add,
     slot_add_c,
     slot_c_sub,
@@ -58,7 +64,6 @@ from ..intervals import (
     slot_negate,
     slot_sub,
     slot_sub_c,
-    step_down,
     trig_bounds,
 )
 from ..types import Array
@@ -91,75 +96,9 @@ _LIB_TINY = 4 * _TINY
 
 # ------------------------------------------------------------------ one element
 @kernel(inline=True)
-def _up(x: float) -> float:  # pragma: no cover - compiled
-    """An upper bound moved up by one ulp (or a few): ``intervals._above``."""
-    return -step_down(-x, False)
-
-
-@kernel(inline=True)
-def _lib_down(x: float) -> float:  # pragma: no cover - compiled
-    """``widen_down(x, _LIB_ULPS)``: a library function's lower bound."""
-    return move_below(x, _LIB_REL, _LIB_TINY, False)
-
-
-@kernel(inline=True)
-def _lib_up(x: float) -> float:  # pragma: no cover - compiled
-    """``widen_up(x, _LIB_ULPS)``."""
-    return -move_below(-x, _LIB_REL, _LIB_TINY, False)
-
-
-@kernel(inline=True)
-def _max(a: float, b: float) -> float:  # pragma: no cover - compiled
-    """``np.maximum`` of two floats: NaN if either is."""
-    return np.nan if ((a != a) | (b != b)) else (a if a >= b else b)
-
-
-@kernel(inline=True)
-def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
-    """``np.minimum`` of two floats: NaN if either is."""
-    return np.nan if ((a != a) | (b != b)) else (a if a <= b else b)
-
-
-@kernel(inline=True)
-def _reciprocal(x: float) -> float:  # pragma: no cover - compiled
-    """``1.0 / x`` as numpy rounds it, an infinity of the zero's sign for a zero
-    (compiled code would raise)."""
-    return np.copysign(np.inf, x) if x == 0.0 else 1.0 / x
-
-
-@kernel(inline=True)
-def _div(
-    a_lo: float, a_hi: float, b_lo: float, b_hi: float
-) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``Interval.__truediv__``: the product with ``[1 / hi, 1 / lo]`` rounded
-    outwards, or with the whole line where the divisor may vanish."""
-    straddles = (b_lo <= 0) & (b_hi >= 0)
-    i_lo = -np.inf if straddles else step_down(_reciprocal(b_hi), False)
-    i_hi = np.inf if straddles else _up(_reciprocal(b_lo))
-    return interval_mul(a_lo, a_hi, i_lo, i_hi)
-
-
-@kernel(inline=True)
-def _square(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``intervals.square``: ``x * x``, from 0 where ``x`` straddles 0."""
-    s_lo, s_hi = interval_mul(lo, hi, lo, hi)
-    straddles = (lo <= 0) & (hi >= 0)
-    return (0.0 if straddles else _max(s_lo, 0.0)), s_hi
-
-
-@kernel(inline=True)
-def _sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``intervals.sqrt``: the square root of the non-negative part; NaN above
-    where there is none."""
-    low = 0.0 if lo <= 0 else step_down(np.sqrt(_max(lo, 0.0)), False)
-    high = np.nan if hi < 0 else _up(np.sqrt(_max(hi, 0.0)))
-    return _max(low, 0.0), high
-
-
-@kernel(inline=True)
 def _clip_mid(lo: float, hi: float) -> float:  # pragma: no cover - compiled
     """``Interval.mid``: ``np.clip(0.5 * lo + 0.5 * hi, lo, hi)``."""
-    return _min(_max(0.5 * lo + 0.5 * hi, lo), hi)
+    return nan_min(nan_max(0.5 * lo + 0.5 * hi, lo), hi)
 
 
 @kernel(inline=True)
@@ -182,11 +121,11 @@ def _plane(
 def _g_at(tv: float, dv: float, leg: Array) -> tuple[float, float]:  # pragma: no cover
     """``g`` of ``DeltaLeg._g_range`` at the numbers ``t``, ``d^2``:
     ``(square(t) + d^2 + c) / (t * 2 la)``."""
-    a_lo, a_hi = _square(tv, tv)
+    a_lo, a_hi = interval_square(tv, tv)
     a_lo, a_hi = interval_add(a_lo, a_hi, dv, dv)
     a_lo, a_hi = interval_add(a_lo, a_hi, leg[C_LO], leg[C_HI])
     b_lo, b_hi = interval_mul(tv, tv, leg[TWO_ARM], leg[TWO_ARM])
-    return _div(a_lo, a_hi, b_lo, b_hi)
+    return interval_div(a_lo, a_hi, b_lo, b_hi)
 
 
 @kernel
@@ -196,12 +135,12 @@ def _g_range(
     """``DeltaLeg._g_range``: the bounds of ``g`` for ``t`` in ``[t_lo, t_hi]`` and
     ``d^2`` in ``[d_lo, d_hi]`` (the ends of ``t``, and the minimum inside where
     ``g`` is convex in ``t``); a NaN bound made infinite."""
-    g_hi = _max(_g_at(t_lo, d_hi, leg)[1], _g_at(t_hi, d_hi, leg)[1])
-    g_lo = _min(_g_at(t_lo, d_lo, leg)[0], _g_at(t_hi, d_lo, leg)[0])
+    g_hi = nan_max(_g_at(t_lo, d_hi, leg)[1], _g_at(t_hi, d_hi, leg)[1])
+    g_lo = nan_min(_g_at(t_lo, d_lo, leg)[0], _g_at(t_hi, d_lo, leg)[0])
     k_lo, k_hi = interval_add(d_lo, d_lo, leg[C_LO], leg[C_HI])
-    r_lo, r_hi = _sqrt(k_lo, k_hi)
+    r_lo, r_hi = interval_sqrt(k_lo, k_hi)
     if (k_lo > 0) & (r_lo <= t_hi) & (r_hi >= t_lo):
-        g_lo = _min(g_lo, interval_mul(r_lo, r_hi, leg[INV_LO], leg[INV_HI])[0])
+        g_lo = nan_min(g_lo, interval_mul(r_lo, r_hi, leg[INV_LO], leg[INV_HI])[0])
     g_lo = -np.inf if g_lo != g_lo else g_lo
     g_hi = np.inf if g_hi != g_hi else g_hi
     return g_lo, g_hi
@@ -220,11 +159,11 @@ def _g_boxes(
     """``DeltaLeg._g_boxes`` of one box: the bounds of ``g`` and the lower bound of
     ``t = sqrt(s^2 + z^2)``, then ``s`` (its bounds)."""
     s_lo, s_hi, d_lo, d_hi = _plane(x_lo, x_hi, y_lo, y_hi, leg)
-    a_lo, a_hi = _square(s_lo, s_hi)
-    b_lo, b_hi = _square(z_lo, z_hi)
+    a_lo, a_hi = interval_square(s_lo, s_hi)
+    b_lo, b_hi = interval_square(z_lo, z_hi)
     a_lo, a_hi = interval_add(a_lo, a_hi, b_lo, b_hi)
-    t_lo, t_hi = _sqrt(a_lo, a_hi)
-    d2_lo, d2_hi = _square(d_lo, d_hi)
+    t_lo, t_hi = interval_sqrt(a_lo, a_hi)
+    d2_lo, d2_hi = interval_square(d_lo, d_hi)
     g_lo, g_hi = _g_range(t_lo, t_hi, d2_lo, d2_hi, leg)
     return g_lo, g_hi, t_lo, s_lo, s_hi
 
@@ -233,9 +172,9 @@ def _g_boxes(
 def _atan_bounds(lo: float, hi: float, cut: bool) -> tuple[float, float]:  # pragma: no cover
     """``intervals.arctan2`` from the least and greatest arctan2 of the corners:
     widened, the whole ``[-pi, pi]`` where the box meets the cut."""
-    low = -_PI_UP if cut else _lib_down(lo)
-    high = _PI_UP if cut else _lib_up(hi)
-    return _max(low, -_PI_UP), _min(high, _PI_UP)
+    low = -_PI_UP if cut else lib_below(lo)
+    high = _PI_UP if cut else lib_above(hi)
+    return nan_max(low, -_PI_UP), nan_min(high, _PI_UP)
 
 
 # ------------------------------------------------------------------ passes
@@ -254,7 +193,7 @@ def _div_into(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None: 
     a_lo, a_hi, b_lo, b_hi = lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w]
     o_lo, o_hi = lo[o, :w], hi[o, :w]
     for j in range(w):
-        o_lo[j], o_hi[j] = _div(a_lo[j], a_hi[j], b_lo[j], b_hi[j])
+        o_lo[j], o_hi[j] = interval_div(a_lo[j], a_hi[j], b_lo[j], b_hi[j])
 
 
 # the slots of a chunk: the box (x, y, z) and its centre; the cosine and sine of
@@ -329,8 +268,8 @@ def _plain_rest(
         matrix[i] = cm + i
     slot_det3(lo, hi, matrix, alt, t, w)
     for j in range(w):
-        lo[o, j] = _max(lo[nat, j], lo[alt, j])
-        hi[o, j] = _min(hi[nat, j], hi[alt, j])
+        lo[o, j] = nan_max(lo[nat, j], lo[alt, j])
+        hi[o, j] = nan_min(hi[nat, j], hi[alt, j])
 
 
 @kernel
@@ -434,8 +373,8 @@ def centre_args(lo: Array, hi: Array, legs: Array, out: Array) -> None:  # pragm
         for k in range(3):
             g_lo, g_hi, _, s_lo, s_hi = _g_boxes(mx, mx, my, my, mz, mz, legs[k])
             # intervals.arccos: np.clip of each bound to [-1, 1]
-            out[0, k, j] = _min(_max(g_hi, -1.0), 1.0)
-            out[1, k, j] = _min(_max(g_lo, -1.0), 1.0)
+            out[0, k, j] = nan_min(nan_max(g_hi, -1.0), 1.0)
+            out[1, k, j] = nan_min(nan_max(g_lo, -1.0), 1.0)
             out[2, k, j] = _clip_mid(s_lo, s_hi)
             out[3, k, j] = _clip_mid(-mz, -mz)
 
@@ -477,13 +416,13 @@ def centre_angles(
     alpha's arguments (:func:`centre_args`)."""
     for k in range(3):
         for j in range(cs.shape[1]):
-            out[2, k, j] = _max(_lib_down(acos[0, k, j]), 0.0)
-            out[3, k, j] = _min(_lib_up(acos[1, k, j]), _PI_UP)
+            out[2, k, j] = nan_max(lib_below(acos[0, k, j]), 0.0)
+            out[3, k, j] = nan_min(lib_above(acos[1, k, j]), _PI_UP)
             c_k, s_k = cs[k, j], sn[k, j]
             r_lo, r_hi = _atan_bounds(ref[k, j], ref[k, j], (c_k <= 0) & (s_k <= 0) & (s_k >= 0))
             c0, c1, c2, c3 = corners[0, k, j], corners[1, k, j], corners[2, k, j], corners[3, k, j]
-            least = _min(_min(_min(c0, c1), c2), c3)
-            most = _max(_max(_max(c0, c1), c2), c3)
+            least = nan_min(nan_min(nan_min(c0, c1), c2), c3)
+            most = nan_max(nan_max(nan_max(c0, c1), c2), c3)
             cut = (turned[0, k, j] <= 0) & (turned[2, k, j] <= 0) & (turned[3, k, j] >= 0)
             t_lo, t_hi = _atan_bounds(least, most, cut)
             out[0, k, j], out[1, k, j] = interval_add(r_lo, r_hi, t_lo, t_hi)
@@ -619,5 +558,5 @@ def mean_value_bounds(
         for j in range(size):
             t_lo, t_hi = s_lo[tot, j], s_hi[tot, j]
             if np.isfinite(t_lo) and np.isfinite(t_hi):
-                out_lo[s + j] = _max(out_lo[s + j], t_lo)
-                out_hi[s + j] = _min(out_hi[s + j], t_hi)
+                out_lo[s + j] = nan_max(out_lo[s + j], t_lo)
+                out_hi[s + j] = nan_min(out_hi[s + j], t_hi)

@@ -29,6 +29,7 @@ from ..intervals import (
     Slot,
     next_below,
     point_sin_cos,
+    reciprocal,
     slot_add,
     slot_det3,
     slot_mul,
@@ -253,13 +254,6 @@ def row_bounds(
         out_hi[:, s : s + size] = s_hi[items:temp, :size]
 
 
-@kernel(inline=True)
-def _reciprocal(x: float) -> float:  # pragma: no cover - compiled
-    """``1.0 / x`` as numpy rounds it, an infinity of the zero's sign for a zero
-    (compiled code would raise)."""
-    return np.copysign(np.inf, x) if x == 0.0 else 1.0 / x
-
-
 @kernel
 def joint_gradient_bounds(
     lo: Array,
@@ -288,8 +282,8 @@ def joint_gradient_bounds(
         for j in range(size):
             r_lo, r_hi = rho_lo[s + j], rho_hi[s + j]
             straddles = r_lo <= 0 and r_hi >= 0
-            i_lo = next_below(_reciprocal(r_hi))
-            i_hi = _up(_reciprocal(r_lo))
+            i_lo = next_below(reciprocal(r_hi))
+            i_hi = _up(reciprocal(r_lo))
             s_lo[inv, j] = -np.inf if straddles else i_lo
             s_hi[inv, j] = np.inf if straddles else i_hi
         for e in range(3):

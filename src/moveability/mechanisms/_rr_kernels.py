@@ -44,9 +44,16 @@ from ..intervals import (
     Slot,
     holds_angle,
     interval_add,
+    interval_div,
     interval_mul,
+    interval_sqrt,
+    interval_square,
     interval_sub,
+    lib_above,
+    lib_below,
     move_below,
+    nan_max,
+    nan_min,
     slot_add,
     slot_add_c,
     slot_c_sub,
@@ -100,73 +107,6 @@ def _next_below(x: float) -> float:  # pragma: no cover - compiled
     inlined form ``intervals.step_down`` computes it: without jumps on the data, so
     that the loops around it vectorise."""
     return step_down(x, False)
-
-
-@kernel(inline=True)
-def _up(x: float) -> float:  # pragma: no cover - compiled
-    """An upper bound moved up as :func:`_next_below` moves a lower bound down
-    (``intervals._above`` by one ulp: ``-move_below(-x)``)."""
-    return -step_down(-x, False)
-
-
-@kernel(inline=True)
-def _lib_down(x: float) -> float:  # pragma: no cover - compiled
-    """``widen_down(x, _LIB_ULPS)``: a library function's lower bound."""
-    return move_below(x, _LIB_REL, _LIB_TINY, False)
-
-
-@kernel(inline=True)
-def _lib_up(x: float) -> float:  # pragma: no cover - compiled
-    """``widen_up(x, _LIB_ULPS)``."""
-    return -move_below(-x, _LIB_REL, _LIB_TINY, False)
-
-
-@kernel(inline=True)
-def _max(a: float, b: float) -> float:  # pragma: no cover - compiled
-    """``np.maximum`` of two floats: NaN if either is, else ``a`` when ``a >= b``."""
-    return np.nan if ((a != a) | (b != b)) else (a if a >= b else b)
-
-
-@kernel(inline=True)
-def _min(a: float, b: float) -> float:  # pragma: no cover - compiled
-    """``np.minimum`` of two floats: NaN if either is, else ``a`` when ``a <= b``."""
-    return np.nan if ((a != a) | (b != b)) else (a if a <= b else b)
-
-
-@kernel(inline=True)
-def _reciprocal(x: float) -> float:  # pragma: no cover - compiled
-    """``1.0 / x`` as numpy rounds it, an infinity of the zero's sign for a zero
-    (compiled code would raise)."""
-    return np.copysign(np.inf, x) if x == 0.0 else 1.0 / x
-
-
-@kernel(inline=True)
-def _div(
-    a_lo: float, a_hi: float, b_lo: float, b_hi: float
-) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``Interval.__truediv__``: the product with ``[1 / hi, 1 / lo]`` rounded
-    outwards, or with the whole line where the divisor may vanish."""
-    straddles = (b_lo <= 0) & (b_hi >= 0)
-    i_lo = -np.inf if straddles else _next_below(_reciprocal(b_hi))
-    i_hi = np.inf if straddles else _up(_reciprocal(b_lo))
-    return interval_mul(a_lo, a_hi, i_lo, i_hi)
-
-
-@kernel(inline=True)
-def _square(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``intervals.square``: ``x * x``, from 0 where ``x`` straddles 0."""
-    s_lo, s_hi = interval_mul(lo, hi, lo, hi)
-    straddles = (lo <= 0) & (hi >= 0)
-    return (0.0 if straddles else _max(s_lo, 0.0)), s_hi
-
-
-@kernel(inline=True)
-def _sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``intervals.sqrt``: the square root of the non-negative part; NaN above
-    where there is none."""
-    low = 0.0 if lo <= 0 else _next_below(np.sqrt(_max(lo, 0.0)))
-    high = np.nan if hi < 0 else _up(np.sqrt(_max(hi, 0.0)))
-    return _max(low, 0.0), high
 
 
 @kernel(inline=True)
@@ -255,7 +195,7 @@ def _g(
     number ``4 a^2``, ``shift`` the enclosure of ``a^2 - b^2``)."""
     p_lo, p_hi = interval_mul(r_lo, r_hi, four_a2, four_a2)
     q_lo, q_hi = interval_add(r_lo, r_hi, shift_lo, shift_hi)
-    q_lo, q_hi = _square(q_lo, q_hi)
+    q_lo, q_hi = interval_square(q_lo, q_hi)
     return interval_sub(p_lo, p_hi, q_lo, q_hi)
 
 
@@ -276,7 +216,7 @@ def _square_into(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pra
     """Slot ``o`` = ``intervals.square`` of slot ``a``."""
     a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
     for j in range(w):
-        o_lo[j], o_hi[j] = _square(a_lo[j], a_hi[j])
+        o_lo[j], o_hi[j] = interval_square(a_lo[j], a_hi[j])
 
 
 @kernel
@@ -285,7 +225,7 @@ def _div_into(
 ) -> None:  # pragma: no cover - compiled
     """Slot ``o`` = slot ``a`` / slot ``b`` (``Interval.__truediv__``)."""
     for j in range(w):
-        o_lo_j, o_hi_j = _div(lo[a, j], hi[a, j], lo[b, j], hi[b, j])
+        o_lo_j, o_hi_j = interval_div(lo[a, j], hi[a, j], lo[b, j], hi[b, j])
         lo[o, j], hi[o, j] = o_lo_j, o_hi_j
 
 
@@ -335,9 +275,9 @@ def _branch_form(
         _square_into(lo, hi, dot, dot, w)
         slot_sub(lo, hi, wy, dot, e, w)
     for j in range(w):
-        ends_lo, ends_hi = _min(lo[u, j], lo[v, j]), _max(hi[u, j], hi[v, j])
+        ends_lo, ends_hi = nan_min(lo[u, j], lo[v, j]), nan_max(hi[u, j], hi[v, j])
         inside = (lo[rho, j] <= top) & (hi[rho, j] >= top)
-        lo[k, j], hi[k, j] = _sqrt(ends_lo, _max(ends_hi, g_top) if inside else ends_hi)
+        lo[k, j], hi[k, j] = interval_sqrt(ends_lo, nan_max(ends_hi, g_top) if inside else ends_hi)
     _div_into(lo, hi, k, r2, k, w)
     # (Q - O) x (P - O) and (P - O) . (P - Q)
     slot_sub_c(lo, hi, q, leg[BASE_X], leg[BASE_X], ox, w)
@@ -429,8 +369,8 @@ def det_a_bounds(
                 )  # fmt: skip
                 slot_mul_c(s_lo, s_hi, form, sign, sign, form, size)
                 for j in range(size):
-                    m_lo = _max(s_lo[nat, j], s_lo[form, j])
-                    m_hi = _min(s_hi[nat, j], s_hi[form, j])
+                    m_lo = nan_max(s_lo[nat, j], s_lo[form, j])
+                    m_hi = nan_min(s_hi[nat, j], s_hi[form, j])
                     # a NaN bound leaves the other enclosure, and so does an empty meet
                     if not (m_lo != m_lo or m_hi != m_hi or m_lo > m_hi):
                         s_lo[nat, j], s_hi[nat, j] = m_lo, m_hi
@@ -445,7 +385,7 @@ def _near_far(
 ) -> tuple[float, float]:  # pragma: no cover - compiled
     """One axis of the box's point nearest the base (``np.clip``) and of its
     corner farthest from it."""
-    near = _min(_max(base, lo), hi)
+    near = nan_min(nan_max(base, lo), hi)
     far = lo if abs(lo - base) > abs(hi - base) else hi
     return near, far
 
@@ -455,7 +395,7 @@ def _sqrt_into(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pragm
     """Slot ``o`` = ``intervals.sqrt`` of slot ``a``."""
     a_lo, a_hi, o_lo, o_hi = lo[a, :w], hi[a, :w], lo[o, :w], hi[o, :w]
     for j in range(w):
-        o_lo[j], o_hi[j] = _sqrt(a_lo[j], a_hi[j])
+        o_lo[j], o_hi[j] = interval_sqrt(a_lo[j], a_hi[j])
 
 
 # the slots of the legs' chunks (_leg_chunk): the box (x, y); its nearest point and
@@ -524,22 +464,22 @@ def _arccos_args(
     """``RRLeg._alpha`` up to its arccos, for box ``j`` of a chunk (:func:`_leg_chunk`):
     the clipped arguments whose arccos are the lower and upper bounds of alpha (of
     the upper and lower bounds of g)."""
-    g_lo = _min(lo[_LGN, j], lo[_LGF, j])
-    g_hi = _max(hi[_LGN, j], hi[_LGF, j])
+    g_lo = nan_min(lo[_LGN, j], lo[_LGF, j])
+    g_hi = nan_max(hi[_LGN, j], hi[_LGF, j])
     if leg[K_POSITIVE] > 0:
         inside = lo[_LN2, j] <= leg[STAR_HI] and hi[_LF2, j] >= leg[STAR_LO]
         if inside:
-            g_lo = _min(g_lo, leg[G_MIN])
+            g_lo = nan_min(g_lo, leg[G_MIN])
     g_lo = -np.inf if g_lo != g_lo else g_lo
     g_hi = np.inf if g_hi != g_hi else g_hi
     # intervals.arccos: np.clip of each bound to [-1, 1]
-    return _min(_max(g_hi, -1.0), 1.0), _min(_max(g_lo, -1.0), 1.0)
+    return nan_min(nan_max(g_hi, -1.0), 1.0), nan_min(nan_max(g_lo, -1.0), 1.0)
 
 
 @kernel(inline=True)
 def _alpha(acos_lo: float, acos_hi: float) -> tuple[float, float]:  # pragma: no cover
     """``intervals.arccos`` from the arccos of its two arguments."""
-    return _max(_lib_down(acos_lo), 0.0), _min(_lib_up(acos_hi), _PI_UP)
+    return nan_max(lib_below(acos_lo), 0.0), nan_min(lib_above(acos_hi), _PI_UP)
 
 
 @kernel
@@ -615,9 +555,9 @@ def _atan_bounds(
 ) -> tuple[float, float]:  # pragma: no cover - compiled
     """``intervals.arctan2`` from the least and greatest arctan2 of the corners:
     widened, the whole ``[-pi, pi]`` where the box meets the cut."""
-    low = -_PI_UP if cut else _lib_down(lo)
-    high = _PI_UP if cut else _lib_up(hi)
-    return _max(low, -_PI_UP), _min(high, _PI_UP)
+    low = -_PI_UP if cut else lib_below(lo)
+    high = _PI_UP if cut else lib_above(hi)
+    return nan_max(low, -_PI_UP), nan_min(high, _PI_UP)
 
 
 @kernel
@@ -651,8 +591,8 @@ def reach_finish(
         v = ref[j]
         r_lo, r_hi = _atan_bounds(v, v, cs[j] <= 0 and sn[j] <= 0 and sn[j] >= 0)
         c0, c1, c2, c3 = corners[0, j], corners[1, j], corners[2, j], corners[3, j]
-        m_lo = _min(_min(_min(c0, c1), c2), c3)
-        m_hi = _max(_max(_max(c0, c1), c2), c3)
+        m_lo = nan_min(nan_min(nan_min(c0, c1), c2), c3)
+        m_hi = nan_max(nan_max(nan_max(c0, c1), c2), c3)
         cut = prep[2, j] <= 0 and prep[4, j] <= 0 and prep[5, j] >= 0
         t_lo, t_hi = _atan_bounds(m_lo, m_hi, cut)
         th_lo, th_hi = interval_add(r_lo, r_hi, t_lo, t_hi)
@@ -661,7 +601,7 @@ def reach_finish(
         # the hull: theta + [-alpha, alpha] or theta + [alpha, 2 pi - alpha]
         z_lo, z_hi = interval_add(th_lo, th_hi, -a_hi, a_hi)
         q_lo, q_hi = interval_sub(_TWO_PI_LO, _TWO_PI_HI, a_lo, a_lo)
-        p_lo, p_hi = interval_add(th_lo, th_hi, _min(a_lo, q_lo), _max(a_lo, q_hi))
+        p_lo, p_hi = interval_add(th_lo, th_hi, nan_min(a_lo, q_lo), nan_max(a_lo, q_hi))
         if z_hi - z_lo <= p_hi - p_lo:
             h_lo, h_hi = z_lo, z_hi
         else:
@@ -728,7 +668,7 @@ def fold_terms_finish(
         sin_max = _trig(a_lo, a_hi, True)[1]
         inverse = 0.0
         if sin_max > 0:
-            inverse = np.nextafter(1.0 / _max(sin_max, 1e-300), 0.0)
+            inverse = np.nextafter(1.0 / nan_max(sin_max, 1e-300), 0.0)
         terms_lo[SCALE, j], terms_hi[SCALE, j] = interval_mul(
             terms_lo[SCALE, j], terms_hi[SCALE, j], inverse, np.inf
         )
@@ -764,8 +704,8 @@ def fold_rate_bounds(
         turn_lo, turn_hi = interval_sub(p_lo, p_hi, q_lo, q_hi)
         code = status[j]
         keeps[j] = (code == outer and radial_hi <= 0) or (code == inner and radial_lo >= 0)
-        p_lo, p_hi = _div(radial_lo, radial_hi, terms_lo[RHO, j], terms_hi[RHO, j])
+        p_lo, p_hi = interval_div(radial_lo, radial_hi, terms_lo[RHO, j], terms_hi[RHO, j])
         p_lo, p_hi = interval_mul(-terms_hi[SCALE, j], -terms_lo[SCALE, j], p_lo, p_hi)
-        q_lo, q_hi = _div(turn_lo, turn_hi, terms_lo[RHO2, j], terms_hi[RHO2, j])
+        q_lo, q_hi = interval_div(turn_lo, turn_hi, terms_lo[RHO2, j], terms_hi[RHO2, j])
         p_lo, p_hi = interval_mul(p_lo, p_hi, sign, sign)
         out_lo[j], out_hi[j] = interval_add(q_lo, q_hi, p_lo, p_hi)
