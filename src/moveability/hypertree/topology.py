@@ -110,6 +110,34 @@ def adjacency(
     return pairs.astype(np.intp, copy=False)
 
 
+def _refinement(
+    tree: HyperTree, old_tree: HyperTree, old_index: NDArray[np.intp], status: int | None
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.int64]] | None:
+    """For a tree refined from ``old_tree`` (``old_index`` as in
+    :func:`refined_adjacency`): the leaves with the ``status``, the kept leaves
+    and each old leaf's new index (-1 where it was split); None when a split
+    leaf did not have the ``status`` (its neighbours are then not all known)."""
+    chosen = (
+        np.ones(len(tree), dtype=bool) if status is None else (status_mask(status)[tree.status])
+    )
+    old_chosen = (
+        np.ones(len(old_tree), dtype=bool)
+        if status is None
+        else (status_mask(status)[old_tree.status])
+    )
+    old_index = np.asarray(old_index, dtype=np.int64)
+    if old_index.shape != (len(tree),) or old_index.max(initial=-1) >= len(old_tree):
+        raise InvalidParameterError(
+            "old_index", f"one index below {len(old_tree)} (or -1) per leaf", old_index.shape
+        )
+    kept = old_index >= 0
+    new_of_old = np.full(len(old_tree), -1, dtype=np.int64)
+    new_of_old[old_index[kept]] = np.flatnonzero(kept)
+    if ((new_of_old < 0) & ~old_chosen).any():
+        return None
+    return chosen, kept, new_of_old
+
+
 def refined_adjacency(
     tree: HyperTree,
     old_tree: HyperTree,
@@ -143,25 +171,10 @@ def refined_adjacency(
     True
     """
     c = _check_connectivity(tree, connectivity)
-    chosen = (
-        np.ones(len(tree), dtype=bool) if status is None else (status_mask(status)[tree.status])
-    )
-    old_chosen = (
-        np.ones(len(old_tree), dtype=bool)
-        if status is None
-        else (status_mask(status)[old_tree.status])
-    )
-    old_index = np.asarray(old_index, dtype=np.int64)
-    if old_index.shape != (len(tree),) or old_index.max(initial=-1) >= len(old_tree):
-        raise InvalidParameterError(
-            "old_index", f"one index below {len(old_tree)} (or -1) per leaf", old_index.shape
-        )
-    kept = old_index >= 0
-    new_of_old = np.full(len(old_tree), -1, dtype=np.int64)
-    new_of_old[old_index[kept]] = np.flatnonzero(kept)
-    split = new_of_old < 0
-    if (split & ~old_chosen).any():
+    refined = _refinement(tree, old_tree, old_index, status)
+    if refined is None:
         return adjacency(tree, status=status, connectivity=c)
+    chosen, kept, new_of_old = refined
     sources = ~kept
     known = remap_pairs(np.asarray(old_pairs, dtype=np.int64).reshape(-1, 2), new_of_old, sources)
     return adjacent_pairs(
@@ -234,25 +247,10 @@ def refined_touching(
     >>> all(np.array_equal(a, b) for a, b in zip((vertex, face), touching(fine)))
     True
     """
-    chosen = (
-        np.ones(len(tree), dtype=bool) if status is None else (status_mask(status)[tree.status])
-    )
-    old_chosen = (
-        np.ones(len(old_tree), dtype=bool)
-        if status is None
-        else (status_mask(status)[old_tree.status])
-    )
-    old_index = np.asarray(old_index, dtype=np.int64)
-    if old_index.shape != (len(tree),) or old_index.max(initial=-1) >= len(old_tree):
-        raise InvalidParameterError(
-            "old_index", f"one index below {len(old_tree)} (or -1) per leaf", old_index.shape
-        )
-    kept = old_index >= 0
-    new_of_old = np.full(len(old_tree), -1, dtype=np.int64)
-    new_of_old[old_index[kept]] = np.flatnonzero(kept)
-    split = new_of_old < 0
-    if (split & ~old_chosen).any():
+    refined = _refinement(tree, old_tree, old_index, status)
+    if refined is None:
         return touching(tree, status=status)
+    chosen, kept, new_of_old = refined
     # the kept leaves that touched a split one probe: those by a face among them
     sources = ~kept
     known = remap_pairs(np.asarray(old_pairs, dtype=np.int64).reshape(-1, 2), new_of_old, sources)
