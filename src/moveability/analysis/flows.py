@@ -55,6 +55,7 @@ __all__ = [
     "FaceNeighbours",
     "attached_nodes",
     "dead_or_certified",
+    "doubled",
     "face_neighbours",
     "flow_conditions",
     "flow_directions",
@@ -830,6 +831,15 @@ def _propagate(
                     break
 
 
+
+@kernel(inline=True)
+def doubled(buffer: NDArray[np.int64], used: int) -> NDArray[np.int64]:  # pragma: no cover
+    """A buffer twice as long as ``buffer`` with its first ``used`` entries (a
+    compiled loop's growing output)."""
+    grown = np.empty(2 * buffer.size, dtype=np.int64)
+    grown[:used] = buffer[:used]
+    return grown
+
 @kernel
 def _dependencies(
     pairs: NDArray[np.int64],
@@ -906,18 +916,10 @@ def _dependencies(
                         fill[sub] += 1
                         if total == cap:
                             cap *= 2
-                            grown = np.empty(cap, dtype=np.int64)
-                            grown[:total] = got_row[:total]
-                            got_row = grown
-                            grown = np.empty(cap, dtype=np.int64)
-                            grown[:total] = got_slot[:total]
-                            got_slot = grown
-                            grown = np.empty(cap, dtype=np.int64)
-                            grown[:total] = got_face[:total]
-                            got_face = grown
-                            grown = np.empty(cap, dtype=np.int64)
-                            grown[:total] = got_sub[:total]
-                            got_sub = grown
+                            got_row = doubled(got_row, total)
+                            got_slot = doubled(got_slot, total)
+                            got_face = doubled(got_face, total)
+                            got_sub = doubled(got_sub, total)
                         got_row[total] = ra
                         got_slot[total] = ca
                         got_face[total] = f

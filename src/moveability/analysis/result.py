@@ -32,6 +32,7 @@ from ..types import NO, UNKNOWN, YES, answer, word
 from .flows import (
     Attachment,
     dead_or_certified,
+    doubled,
     face_neighbours,
     flow_conditions,
     slot_spans,
@@ -611,12 +612,8 @@ def _chain_search(
             m += 1
         if n_got == cap:
             cap *= 2
-            grown = np.empty(cap, dtype=np.int64)
-            grown[:n_got] = got_a[:n_got]
-            got_a = grown
-            grown = np.empty(cap, dtype=np.int64)
-            grown[:n_got] = got_b[:n_got]
-            got_b = grown
+            got_a = doubled(got_a, n_got)
+            got_b = doubled(got_b, n_got)
         got_a[n_got] = i
         got_b[n_got] = j
         n_got += 1
