@@ -390,6 +390,30 @@ def _wrapper(fn: Callable[..., Any], info: _Kernel, specs: list[list[Any]]) -> A
     return call
 
 
+def _deferred(fn: Callable[..., Any], info: _Kernel, specs: list[list[Any]]) -> Any:
+    """:func:`_wrapper`, its source compiled at the kernel's first call: a process
+    pays only for the kernels it calls (about 0.4 ms each)."""
+    made: list[Any] = []
+
+    def wrapped() -> Any:
+        if not made:
+            made.append(_wrapper(fn, info, specs))
+        return made[0]
+
+    def call(*args: Any, **kwargs: Any) -> Any:
+        return (made[0] if made else wrapped())(*args, **kwargs)
+
+    def match(*args: Any) -> int:
+        found: int = wrapped().match(*args)
+        return found
+
+    functools.update_wrapper(call, fn)
+    call.py_func = fn  # type: ignore[attr-defined]
+    call.match = match  # type: ignore[attr-defined]
+    call._moveability_kernel = info  # type: ignore[attr-defined]
+    return call
+
+
 def _fallback(info: _Kernel, *args: Any, **kwargs: Any) -> Any:
     if not info.logged:
         info.logged = True
@@ -420,7 +444,7 @@ def _bind(fn: Callable[..., Any], inline: bool) -> Any:
                 specs.append(arg_specs)
     info = _Kernel(fn, inline, variants)
     if variants:
-        return _wrapper(fn, info, specs)
+        return _deferred(fn, info, specs)
 
     def call(*args: Any, **kwargs: Any) -> Any:
         return _fallback(info, *args, **kwargs)
