@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from moveability import load_spec
+from moveability.errors import SpecError
 from moveability.intervals import Interval
 from moveability.mechanisms import custom
 from moveability.mechanisms.custom import CustomMechanism
@@ -65,6 +66,41 @@ def test_cached_spec_needs_no_sympy(cache) -> None:
     done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr[-500:]
     assert int(done.stdout) > 0
+
+
+def test_other_numbers_need_no_sympy(cache) -> None:
+    """Only the names and the legs go through sympy: a spec met before with other
+    parameter values, joint limits and pose bounds is built from the cache, with
+    its own numbers."""
+    CustomMechanism(load_spec(SPEC))
+    code = (
+        "import sys; from moveability import load_spec; "
+        "from moveability.mechanisms.custom import CustomMechanism; "
+        f"d = dict(load_spec({SPEC!r})); "
+        "d['limits'] = {'t1': [-1.0, 2.0], 't2': 'unlimited'}; "
+        "d['bounds'] = {'x': [-5.0, 9.0], 'y': [0.0, 12.0]}; "
+        "d['parameters'] = {**d['parameters'], 'L2': 6}; "
+        "m = CustomMechanism(d); "
+        "assert 'sympy' not in sys.modules, 'sympy imported'; "
+        "print(m.spec['parameters']['L2'], m.spec['limits'], m.spec['bounds'])"
+    )
+    env = {**os.environ, "MOVEABILITY_CACHE_DIR": str(cache)}
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-500:]
+    assert done.stdout.strip() == (
+        "6.0 {'t1': [-1.0, 2.0], 't2': 'unlimited'} {'x': [-5.0, 9.0], 'y': [0.0, 12.0]}"
+    )
+
+
+def test_numbers_are_checked_when_the_names_are_cached(cache) -> None:
+    data = dict(load_spec(SPEC))
+    CustomMechanism(data)
+    with pytest.raises(SpecError, match="bounds.x"):
+        CustomMechanism({**data, "bounds": {"x": [3.0, 1.0], "y": [0.0, 1.0]}})
+    with pytest.raises(SpecError, match="limits.t2"):
+        CustomMechanism({**data, "limits": {"t1": [0.0, 1.0]}})
+    with pytest.raises(SpecError, match="parameters.L2"):
+        CustomMechanism({**data, "parameters": {**data["parameters"], "L2": float("nan")}})
 
 
 @pytest.mark.parametrize(

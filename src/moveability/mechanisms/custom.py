@@ -69,9 +69,11 @@ which gives the same bounds without the interpreter.
 The normalised spec and the printed bodies are kept in a cache
 (``$MOVEABILITY_CACHE_DIR``, else ``$XDG_CACHE_HOME/moveability`` or
 ``~/.cache/moveability``; an empty ``MOVEABILITY_CACHE_DIR`` turns it off),
-keyed by the spec as given (with the types of its values), the source of this
-module and of :mod:`moveability.spec`, and sympy's version: a spec met before
-is built without importing sympy. A body read back is compiled only if it is
+keyed by what each depends on as given (with the types of its values): the
+spec but its parameter values, joint limits and pose bounds, and for the
+bodies only the names and the legs; with the source of this module and of :mod:`moveability.spec`,
+and sympy's version. A spec met before, even with other limits, bounds or
+parameter values, is built without importing sympy. A body read back is compiled only if it is
 one the printer could have written (numbers, the arguments, ``PI``, ``+``,
 ``*`` and calls of the guarded functions).
 
@@ -587,19 +589,31 @@ def normalise_custom_spec(data: Mapping[str, Any]) -> dict[str, Any]:
 the declared names, numbers, pi, + - * / ** and abs, atan2, cos, exp, log, sin, sqrt, tan, \
 got unknown symbol 'z' in legs[0].constraint
     """
-    key = _cache_key("spec", data)
-    if key is not None:
-        found = _cache_load(key)
-        if isinstance(found, dict):
-            return found
-    out = _normalise(data)
-    if key is not None:
-        _cache_store(key, out)
-    return out
+    if not isinstance(data, Mapping):
+        raise SpecError("spec", "a mapping", data)
+    # what needs sympy (the names and the legs) is cached apart from the numbers, so
+    # that a spec differing only in its parameter values, limits or bounds is built
+    # without sympy
+    shape = {k: v for k, v in data.items() if k not in _RANGES}
+    if isinstance(shape.get("parameters"), Mapping):
+        shape["parameters"] = list(shape["parameters"])
+    key = _cache_key("spec", shape)
+    found = None if key is None else _cache_load(key)
+    if isinstance(found, dict):
+        names = found
+    else:
+        names = _normalise_names(data)
+        if key is not None:
+            _cache_store(key, names)
+    return _normalise_numbers(data, names)
 
 
-def _normalise(data: Mapping[str, Any]) -> dict[str, Any]:
-    """:func:`normalise_custom_spec` without the cache."""
+#: the spec's keys that :func:`_normalise_numbers` reads alone
+_RANGES = ("limits", "bounds")
+
+
+def _normalise_names(data: Mapping[str, Any]) -> dict[str, Any]:
+    """:func:`normalise_custom_spec` but the limits and bounds (sympy parses the legs)."""
     if not isinstance(data, Mapping):
         raise SpecError("spec", "a mapping", data)
     for key in data:
@@ -680,7 +694,24 @@ def _normalise(data: Mapping[str, Any]) -> dict[str, Any]:
     for joint in joints:
         if joint not in by_joint:
             raise SpecError("legs", f"a leg for joint {joint}", Plain("nothing"))
+    return {
+        "mechanism": "custom",
+        "pose": pose,
+        "periodic": periodic,
+        "joints": joints,
+        "parameters": parameters,
+        "legs": [by_joint[j] for j in joints],
+    }
 
+
+def _normalise_numbers(data: Mapping[str, Any], names: dict[str, Any]) -> dict[str, Any]:
+    """The normalised spec: ``names`` (:func:`_normalise_names` of ``data``, or of a
+    spec differing from it in these numbers alone) with the parameter values, joint
+    limits and pose bounds of ``data``, checked against them."""
+    pose, joints, periodic = names["pose"], names["joints"], names["periodic"]
+    given = data.get("parameters", {})
+    parameters = {name: _number(given[name], f"parameters.{name}") for name in names["parameters"]}
+    kinds = {leg["joint"]: leg["kind"] for leg in names["legs"]}
     limits_raw = _table(data.get("limits"), "limits", "a table giving each joint's limits")
     limits: dict[str, Any] = {}
     for name in limits_raw:
@@ -691,7 +722,7 @@ def _normalise(data: Mapping[str, Any]) -> dict[str, Any]:
         if joint not in limits_raw:
             raise SpecError(key, '[lo, hi] or "unlimited"', Plain("nothing"))
         value = limits_raw[joint]
-        prismatic = by_joint[joint]["kind"] == "prismatic"
+        prismatic = kinds[joint] == "prismatic"
         if isinstance(value, str):
             if value.strip().lower() != "unlimited" or prismatic:
                 allowed = "[lo, hi]" if prismatic else '[lo, hi] or "unlimited"'
@@ -716,16 +747,7 @@ def _normalise(data: Mapping[str, Any]) -> dict[str, Any]:
         if name in periodic and not (_TWO_PI_LO <= pair[1] - pair[0] <= _TWO_PI_HI):
             raise SpecError(key, "one full turn (hi - lo = 2*pi) for a periodic coordinate", pair)
         bounds[name] = pair
-    return {
-        "mechanism": "custom",
-        "pose": pose,
-        "periodic": periodic,
-        "joints": joints,
-        "parameters": parameters,
-        "legs": [by_joint[j] for j in joints],
-        "limits": limits,
-        "bounds": bounds,
-    }
+    return {**names, "parameters": parameters, "limits": limits, "bounds": bounds}
 
 
 def _leg_bodies(spec: Mapping[str, Any]) -> dict[str, str]:
@@ -887,7 +909,16 @@ def _body_ok(body: object, n_args: int) -> bool:
 
 def _bodies(spec: Mapping[str, Any]) -> dict[str, str]:
     """:func:`_leg_bodies`, kept in the cache of compiled specs (checked when read)."""
-    key = _cache_key("bodies", spec)
+    # the bodies depend on the names (of the parameters too, not their values) and the legs
+    key = _cache_key(
+        "bodies",
+        {
+            "pose": spec["pose"],
+            "joints": spec["joints"],
+            "parameters": list(spec["parameters"]),
+            "legs": spec["legs"],
+        },
+    )
     if key is not None:
         found = _cache_load(key)
         if isinstance(found, dict):
