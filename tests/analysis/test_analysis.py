@@ -364,9 +364,45 @@ def test_pieces_written_in_place_are_the_joint_pieces():
         JointLimit(lo=10.0, hi=25.0, periodic=False, prismatic=True),
         JointLimit(lo=-1.0, hi=2.5, periodic=False, prismatic=False),
     ):
+        # leg 1 of (n, P, 3) enclosures, the others' values around it
+        lo3 = np.stack([lo - 1.0, lo, lo + 1.0], axis=2)
+        hi3 = np.stack([hi - 1.0, hi, hi + 1.0], axis=2)
         out_lo, out_hi = np.empty((2, *lo.shape)), np.empty((2, *lo.shape))
-        ok = _pieces_into(lo, hi, limit, out_lo, out_hi)
+        ok = np.empty((2, *lo.shape), dtype=bool)
+        _pieces_into(lo3, hi3, 1, limit, out_lo, out_hi, ok)
         want_lo, want_hi, want_ok = joint_pieces(lo, hi, limit)
         np.testing.assert_array_equal(out_lo, want_lo)
         np.testing.assert_array_equal(out_hi, want_hi)
         np.testing.assert_array_equal(ok, want_ok)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_possible_labels_of_both_signs_are_those_found_apart(seed):
+    """The possible graph's components of both signs from one pass over the pairs
+    are those of each sign found alone (two postures, two slots, a posture pair)."""
+    from moveability.analysis.regions import _possible_labels, _possible_labels_both
+
+    rng = np.random.default_rng([seed, 43])
+    n, n_post, slots, n_legs = 60, 2, 2, 2
+    pairs = np.unique(np.sort(rng.integers(0, n, (150, 2)), axis=1), axis=0)
+    pairs = pairs[pairs[:, 0] < pairs[:, 1]].astype(np.int64)
+    alive = rng.random((2, n, n_post)) < 0.7
+    has = rng.random((n_post, slots, n)) < 0.8
+    lo = rng.uniform(0, 1, (n_legs, 2, n, n_post))
+    hi = lo + rng.uniform(0, 0.6, lo.shape)
+    combo = np.array([[0, 0], [1, 0]], dtype=np.int64)
+    pq = np.array([[0, 1]], dtype=np.int64)
+    same_leaf = rng.random((1, n)) < 0.5
+    taken = (alive[:, :, :, None] & has.transpose(2, 0, 1)[None]).reshape(2, -1)
+    labels, counts = _possible_labels_both(
+        pairs, alive, has, lo, hi, combo, pq, same_leaf, taken, 1e-9
+    )
+    for s in range(2):
+        want, count = _possible_labels(
+            pairs, np.ascontiguousarray(alive[s]), has, lo, hi, combo, pq, same_leaf,
+            np.ascontiguousarray(taken[s]), 1e-9,
+        )  # fmt: skip
+        np.testing.assert_array_equal(labels[s], want)
+        assert counts[s] == count
+        # neither everything nor nothing joined
+        assert 1 < count < int(taken[s].sum())

@@ -203,6 +203,74 @@ def _possible_labels(
     return relabel_roots(parent, taken)
 
 
+@kernel
+def _possible_labels_both(
+    pairs: NDArray[np.int64],
+    alive: NDArray[np.bool_],
+    has: NDArray[np.bool_],
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+    combo: NDArray[np.int64],
+    pq: NDArray[np.int64],
+    same_leaf: NDArray[np.bool_],
+    taken: NDArray[np.bool_],
+    tol: float,
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
+    """:func:`_possible_labels` of both signs from one pass over the pairs: ``alive``
+    (2, n, P) and ``taken`` (2, sub-nodes) per sign; whether two pieces overlap
+    is found once for both. Returns the labels (2, sub-nodes) and their counts
+    (2,); each sign's components are those of its own graph (a union-find's
+    partition does not depend on the order of its unions, and the labels are
+    numbered by first sub-node)."""
+    n, n_post = alive.shape[1], alive.shape[2]
+    slots = has.shape[1]
+    parent0 = np.arange(n * n_post * slots)
+    parent1 = np.arange(n * n_post * slots)
+    for t in range(pairs.shape[0]):
+        i, j = pairs[t, 0], pairs[t, 1]
+        for p in range(n_post):
+            both0 = alive[0, i, p] and alive[0, j, p]
+            both1 = alive[1, i, p] and alive[1, j, p]
+            if not (both0 or both1):
+                continue
+            for ci in range(slots):
+                if not has[p, ci, i]:
+                    continue
+                for cj in range(slots):
+                    if has[p, cj, j] and _pieces_meet(lo, hi, combo, i, p, ci, j, p, cj, tol):
+                        u = (i * n_post + p) * slots + ci
+                        v = (j * n_post + p) * slots + cj
+                        if both0:
+                            union_sets(parent0, u, v)
+                        if both1:
+                            union_sets(parent1, u, v)
+    for k in range(pq.shape[0]):
+        p, q = pq[k, 0], pq[k, 1]
+        for i in range(n):
+            if not same_leaf[k, i]:
+                continue
+            both0 = alive[0, i, p] and alive[0, i, q]
+            both1 = alive[1, i, p] and alive[1, i, q]
+            if not (both0 or both1):
+                continue
+            for cp in range(slots):
+                if not has[p, cp, i]:
+                    continue
+                for cq in range(slots):
+                    if has[q, cq, i] and _pieces_meet(lo, hi, combo, i, p, cp, i, q, cq, tol):
+                        u = (i * n_post + p) * slots + cp
+                        v = (i * n_post + q) * slots + cq
+                        if both0:
+                            union_sets(parent0, u, v)
+                        if both1:
+                            union_sets(parent1, u, v)
+    labels = np.empty((2, parent0.size), dtype=np.int64)
+    counts = np.zeros(2, dtype=np.int64)
+    labels[0], counts[0] = relabel_roots(parent0, taken[0])
+    labels[1], counts[1] = relabel_roots(parent1, taken[1])
+    return labels, counts
+
+
 def _posture_pairs(postures: NDArray[np.int64]) -> list[tuple[int, int, NDArray[np.bool_]]]:
     """Pairs of postures with the legs on which they differ."""
     out = []
@@ -249,31 +317,64 @@ def joint_pieces(
     return np.stack([lo0, lo1]), np.stack([hi0, hi1]), np.stack([ok0, ok1])
 
 
+@kernel
+def _stroke_pieces(
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+    leg: int,
+    stop_lo: float,
+    stop_hi: float,
+    out_lo: NDArray[np.float64],
+    out_hi: NDArray[np.float64],
+    out_ok: NDArray[np.bool_],
+) -> None:  # pragma: no cover - compiled
+    """:func:`joint_pieces` of a prismatic joint (its stroke ``[stop_lo, stop_hi]``),
+    leg ``leg`` of the (n, P, legs) enclosures, written into ``out_*`` (2, n, P)
+    in one pass: the same numbers (a NaN bound stays NaN, as in ``np.maximum``)."""
+    n, n_post = lo.shape[0], lo.shape[1]
+    for i in range(n):
+        for p in range(n_post):
+            a = lo[i, p, leg]
+            b = hi[i, p, leg]
+            out_ok[0, i, p] = a <= stop_hi + _TOL and b >= stop_lo - _TOL
+            out_ok[1, i, p] = False
+            out_lo[0, i, p] = stop_lo if a < stop_lo else a
+            out_lo[1, i, p] = stop_lo
+            out_hi[0, i, p] = stop_hi if b > stop_hi else b
+            out_hi[1, i, p] = stop_lo
+
+
 def _pieces_into(
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
+    leg: int,
     limit: JointLimit,
     out_lo: NDArray[np.float64],
     out_hi: NDArray[np.float64],
-) -> NDArray[np.bool_]:
-    """:func:`joint_pieces`, its bounds written into ``out_lo`` and ``out_hi`` (2, ...):
-    the same numbers, with no arrays in between for free and prismatic joints."""
+    out_ok: NDArray[np.bool_],
+) -> None:
+    """:func:`joint_pieces` of leg ``leg`` of the (n, P, legs) enclosures ``lo`` and
+    ``hi``, its bounds and the pieces that exist written into ``out_lo``,
+    ``out_hi`` and ``out_ok`` (2, n, P): the same numbers, with no arrays in
+    between for free and prismatic joints (one compiled pass for a stroke)."""
     if limit.periodic:
         out_lo[...] = -np.inf
         out_hi[...] = np.inf
-        full = np.ones((2, *lo.shape), dtype=bool)
-        full[1] = False
-        return full
-    if limit.prismatic:
-        one = np.zeros((2, *lo.shape), dtype=bool)
-        one[0] = (lo <= limit.hi + _TOL) & (hi >= limit.lo - _TOL)
-        np.maximum(lo, limit.lo, out=out_lo[0])
-        out_lo[1] = limit.lo
-        np.minimum(hi, limit.hi, out=out_hi[0])
-        out_hi[1] = limit.lo
-        return one
-    out_lo[...], out_hi[...], ok = joint_pieces(lo, hi, limit)
-    return ok
+        out_ok[0] = True
+        out_ok[1] = False
+    elif limit.prismatic:
+        _stroke_pieces(
+            np.ascontiguousarray(lo, dtype=np.float64),
+            np.ascontiguousarray(hi, dtype=np.float64),
+            int(leg),
+            float(limit.lo),
+            float(limit.hi),
+            out_lo,
+            out_hi,
+            out_ok,
+        )
+    else:
+        out_lo[...], out_hi[...], out_ok[...] = joint_pieces(lo[:, :, leg], hi[:, :, leg], limit)
 
 
 def split_legs(limits: tuple[JointLimit, ...]) -> list[int]:
@@ -354,14 +455,11 @@ def region_graph(
     # compiled pass, (legs, 2, n, P), and where each piece exists
     piece_lo = np.empty((n_legs, 2, n, n_post))
     piece_hi = np.empty((n_legs, 2, n, n_post))
-    piece_ok = []
+    piece_ok = np.empty((n_legs, 2, n, n_post), dtype=bool)
     for i in range(n_legs):
-        piece_ok.append(
-            _pieces_into(
-                table.angles_lo[:, :, i], table.angles_hi[:, :, i], limits[i], piece_lo[i],
-                piece_hi[i],
-            )
-        )  # fmt: skip
+        _pieces_into(
+            table.angles_lo, table.angles_hi, i, limits[i], piece_lo[i], piece_hi[i], piece_ok[i]
+        )
 
     # has[p][c]: the node of posture p has sub-node c (a piece for every leg)
     has = np.ones((n_post, slots, n), dtype=bool)
@@ -371,23 +469,18 @@ def region_graph(
                 has[p, c] &= piece_ok[i][k][:, p]
 
     combo = np.asarray(combos, dtype=np.int64).reshape(slots, n_legs)
-    has_c = np.ascontiguousarray(has)
-    possible = np.full((2, n * n_post * slots), -1, dtype=np.int64)
-    counts = []
-    for row, s in enumerate((1, -1)):
-        alive = np.ascontiguousarray(table.may_hold(s))
-        taken = alive[:, :, None] & has.transpose(2, 0, 1)
-        labels, count = _possible_labels(
-            pairs, alive, has_c, piece_lo, piece_hi, combo, pq, same_leaf,
-            np.ascontiguousarray(taken.ravel()), _TOL,
-        )  # fmt: skip
-        possible[row] = labels
-        counts.append(int(count))
+    # both signs from one pass over the pairs
+    alive = np.stack([table.may_hold(s) for s in (1, -1)])
+    taken = (alive[:, :, :, None] & has.transpose(2, 0, 1)[None]).reshape(2, -1)
+    possible, counts = _possible_labels_both(
+        pairs, alive, np.ascontiguousarray(has), piece_lo, piece_hi, combo, pq, same_leaf,
+        taken, _TOL,
+    )  # fmt: skip
     return RegionGraph(
         certain=certain.reshape(n, n_post),
         possible=possible.reshape(2, n, n_post * slots),
         slots=slots,
         certain_sign=certain_sign,
         certain_edges=certain_edges,
-        n_possible=(counts[0], counts[1]),
+        n_possible=(int(counts[0]), int(counts[1])),
     )

@@ -531,7 +531,9 @@ def _reachable_contact(
     their common boundary holds a pose that every leg reaches (every leg regular
     there but at most one, which certainly holds reachable poses there)."""
     out = np.zeros(pairs.shape[0], dtype=bool)
-    both = table.group[pairs[:, 0]].any(axis=1) & table.group[pairs[:, 1]].any(axis=1)
+    # per leaf first: one gather of a flag per pair end, not of a row
+    holds: NDArray[np.bool_] = np.asarray(table.group.any(axis=1), dtype=bool)
+    both = holds[pairs[:, 0]] & holds[pairs[:, 1]]
     idx = np.flatnonzero(both)
     if not idx.size:
         return out
@@ -937,9 +939,7 @@ class Analysis:
         after the first has them all), so the result is exactly that of all the
         flows."""
         nodes, bits, exists, faces, _ = self._flows
-        runs = [
-            Attachment(d, nodes, exists, self._neighbours, self._spans) for d in done
-        ]
+        runs = Attachment.both(done, nodes, exists, self._neighbours, self._spans)
         attached = [a.run(bits[row], faces) for a, row in zip(runs, rows, strict=True)]
         missing = self._left_open(done, attached) & ~self._complete_flows
         if not missing.any():
