@@ -204,26 +204,41 @@ def _possible_labels(
 
 
 @kernel
+def _sub_nodes_meet(
+    bounds: NDArray[np.float64], i: int, p: int, ci: int, j: int, q: int, cj: int, tol: float
+) -> bool:  # pragma: no cover - compiled
+    """Whether the pieces of sub-node (i, p, ci) and (j, q, cj) overlap on every leg
+    (``bounds``: (n, P, slots, legs, 2), as :func:`_pieces_meet`)."""
+    for leg in range(bounds.shape[3]):
+        if not (bounds[i, p, ci, leg, 0] <= bounds[j, q, cj, leg, 1] + tol):
+            return False
+        if not (bounds[j, q, cj, leg, 0] <= bounds[i, p, ci, leg, 1] + tol):
+            return False
+    return True
+
+
+@kernel
 def _possible_labels_both(
     pairs: NDArray[np.int64],
     alive: NDArray[np.bool_],
     has: NDArray[np.bool_],
-    lo: NDArray[np.float64],
-    hi: NDArray[np.float64],
-    combo: NDArray[np.int64],
+    bounds: NDArray[np.float64],
     pq: NDArray[np.int64],
     same_leaf: NDArray[np.bool_],
     taken: NDArray[np.bool_],
     tol: float,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
     """:func:`_possible_labels` of both signs from one pass over the pairs: ``alive``
-    (2, n, P) and ``taken`` (2, sub-nodes) per sign; whether two pieces overlap
-    is found once for both. Returns the labels (2, sub-nodes) and their counts
-    (2,); each sign's components are those of its own graph (a union-find's
-    partition does not depend on the order of its unions, and the labels are
-    numbered by first sub-node)."""
+    (2, n, P) and ``taken`` (2, sub-nodes) per sign; the sub-nodes that exist,
+    ``has`` (n, P, slots), and their pieces' bounds, ``bounds`` (n, P, slots,
+    legs, 2: each leg's piece of the slot), node by node (one or two cache
+    lines a node); whether two pieces overlap is found once for both signs.
+    Returns the labels (2, sub-nodes) and their counts (2,); each sign's
+    components are those of its own graph (a union-find's partition does not
+    depend on the order of its unions, and the labels are numbered by first
+    sub-node)."""
     n, n_post = alive.shape[1], alive.shape[2]
-    slots = has.shape[1]
+    slots = has.shape[2]
     parent0 = np.arange(n * n_post * slots)
     parent1 = np.arange(n * n_post * slots)
     for t in range(pairs.shape[0]):
@@ -234,10 +249,10 @@ def _possible_labels_both(
             if not (both0 or both1):
                 continue
             for ci in range(slots):
-                if not has[p, ci, i]:
+                if not has[i, p, ci]:
                     continue
                 for cj in range(slots):
-                    if has[p, cj, j] and _pieces_meet(lo, hi, combo, i, p, ci, j, p, cj, tol):
+                    if has[j, p, cj] and _sub_nodes_meet(bounds, i, p, ci, j, p, cj, tol):
                         u = (i * n_post + p) * slots + ci
                         v = (j * n_post + p) * slots + cj
                         if both0:
@@ -254,10 +269,10 @@ def _possible_labels_both(
             if not (both0 or both1):
                 continue
             for cp in range(slots):
-                if not has[p, cp, i]:
+                if not has[i, p, cp]:
                     continue
                 for cq in range(slots):
-                    if has[q, cq, i] and _pieces_meet(lo, hi, combo, i, p, cp, i, q, cq, tol):
+                    if has[i, q, cq] and _sub_nodes_meet(bounds, i, p, cp, i, q, cq, tol):
                         u = (i * n_post + p) * slots + cp
                         v = (i * n_post + q) * slots + cq
                         if both0:
@@ -318,63 +333,72 @@ def joint_pieces(
 
 
 @kernel
-def _stroke_pieces(
+def _stroke_bounds(
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
-    leg: int,
-    stop_lo: float,
-    stop_hi: float,
-    out_lo: NDArray[np.float64],
-    out_hi: NDArray[np.float64],
-    out_ok: NDArray[np.bool_],
+    strokes: NDArray[np.bool_],
+    stop_lo: NDArray[np.float64],
+    stop_hi: NDArray[np.float64],
+    bounds: NDArray[np.float64],
+    has: NDArray[np.bool_],
 ) -> None:  # pragma: no cover - compiled
-    """:func:`joint_pieces` of a prismatic joint (its stroke ``[stop_lo, stop_hi]``),
-    leg ``leg`` of the (n, P, legs) enclosures, written into ``out_*`` (2, n, P)
-    in one pass: the same numbers (a NaN bound stays NaN, as in ``np.maximum``)."""
-    n, n_post = lo.shape[0], lo.shape[1]
+    """The pieces of the prismatic joints (legs ``strokes``, strokes ``[stop_lo,
+    stop_hi]``) of the (n, P, legs) enclosures, as :func:`joint_pieces` gives
+    them (a NaN bound stays NaN, as in ``np.maximum``): piece 0 into every slot
+    of ``bounds`` (n, P, slots, legs, 2; a stroke has one piece), the slots
+    where it is missing cleared in ``has`` (n, P, slots). One pass."""
+    n, n_post, slots, n_legs = bounds.shape[0], bounds.shape[1], bounds.shape[2], bounds.shape[3]
     for i in range(n):
         for p in range(n_post):
-            a = lo[i, p, leg]
-            b = hi[i, p, leg]
-            out_ok[0, i, p] = a <= stop_hi + _TOL and b >= stop_lo - _TOL
-            out_ok[1, i, p] = False
-            out_lo[0, i, p] = stop_lo if a < stop_lo else a
-            out_lo[1, i, p] = stop_lo
-            out_hi[0, i, p] = stop_hi if b > stop_hi else b
-            out_hi[1, i, p] = stop_lo
+            for leg in range(n_legs):
+                if not strokes[leg]:
+                    continue
+                a = lo[i, p, leg]
+                b = hi[i, p, leg]
+                ok = a <= stop_hi[leg] + _TOL and b >= stop_lo[leg] - _TOL
+                piece_lo = stop_lo[leg] if a < stop_lo[leg] else a
+                piece_hi = stop_hi[leg] if b > stop_hi[leg] else b
+                for c in range(slots):
+                    bounds[i, p, c, leg, 0] = piece_lo
+                    bounds[i, p, c, leg, 1] = piece_hi
+                    if not ok:
+                        has[i, p, c] = False
 
 
-def _pieces_into(
-    lo: NDArray[np.float64],
-    hi: NDArray[np.float64],
-    leg: int,
-    limit: JointLimit,
-    out_lo: NDArray[np.float64],
-    out_hi: NDArray[np.float64],
-    out_ok: NDArray[np.bool_],
-) -> None:
-    """:func:`joint_pieces` of leg ``leg`` of the (n, P, legs) enclosures ``lo`` and
-    ``hi``, its bounds and the pieces that exist written into ``out_lo``,
-    ``out_hi`` and ``out_ok`` (2, n, P): the same numbers, with no arrays in
-    between for free and prismatic joints (one compiled pass for a stroke)."""
-    if limit.periodic:
-        out_lo[...] = -np.inf
-        out_hi[...] = np.inf
-        out_ok[0] = True
-        out_ok[1] = False
-    elif limit.prismatic:
-        _stroke_pieces(
-            np.ascontiguousarray(lo, dtype=np.float64),
-            np.ascontiguousarray(hi, dtype=np.float64),
-            int(leg),
-            float(limit.lo),
-            float(limit.hi),
-            out_lo,
-            out_hi,
-            out_ok,
+def _sub_node_bounds(
+    angles_lo: NDArray[np.float64],
+    angles_hi: NDArray[np.float64],
+    limits: tuple[JointLimit, ...],
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """The pieces of the sub-nodes of the (n, P, legs) enclosures, node by node:
+    ``bounds`` (n, P, slots, legs, 2), each leg's piece (:func:`joint_pieces`)
+    of the slot (see :func:`split_legs`), and ``has`` (n, P, slots), the
+    sub-nodes whose every leg's piece exists. Prismatic joints in one compiled
+    pass, the others from :func:`joint_pieces`."""
+    n, n_post, n_legs = angles_lo.shape
+    split = split_legs(limits)
+    slots = 1 << len(split)
+    bounds = np.empty((n, n_post, slots, n_legs, 2))
+    has = np.ones((n, n_post, slots), dtype=bool)
+    strokes = np.array([lim.prismatic and not lim.periodic for lim in limits], dtype=bool)
+    if strokes.any():
+        _stroke_bounds(
+            np.ascontiguousarray(angles_lo, dtype=np.float64),
+            np.ascontiguousarray(angles_hi, dtype=np.float64),
+            strokes,
+            np.array([float(lim.lo) for lim in limits]),
+            np.array([float(lim.hi) for lim in limits]),
+            bounds,
+            has,
         )
-    else:
-        out_lo[...], out_hi[...], out_ok[...] = joint_pieces(lo[:, :, leg], hi[:, :, leg], limit)
+    for i in np.flatnonzero(~strokes).tolist():
+        lo, hi, ok = joint_pieces(angles_lo[:, :, i], angles_hi[:, :, i], limits[i])
+        for c in range(slots):
+            k = (c >> split.index(i)) & 1 if i in split else 0
+            bounds[:, :, c, i, 0] = lo[k]
+            bounds[:, :, c, i, 1] = hi[k]
+            has[:, :, c] &= ok[k]
+    return bounds, has
 
 
 def split_legs(limits: tuple[JointLimit, ...]) -> list[int]:
@@ -444,38 +468,13 @@ def region_graph(
     # and, one turn on, near lo): a path never passes from one to the other. Each
     # node is split by the piece of [lo, hi] each leg's value lies in, and pieces
     # are joined only where they overlap.
-    n_legs = table.angles_lo.shape[2]
-    split = split_legs(limits)
-    slots = 1 << len(split)
-    combos = [
-        [(c >> split.index(i)) & 1 if i in split else 0 for i in range(n_legs)]
-        for c in range(slots)
-    ]
-    # per leg, the two pieces' bounds written straight into the arrays of the
-    # compiled pass, (legs, 2, n, P), and where each piece exists
-    piece_lo = np.empty((n_legs, 2, n, n_post))
-    piece_hi = np.empty((n_legs, 2, n, n_post))
-    piece_ok = np.empty((n_legs, 2, n, n_post), dtype=bool)
-    for i in range(n_legs):
-        _pieces_into(
-            table.angles_lo, table.angles_hi, i, limits[i], piece_lo[i], piece_hi[i], piece_ok[i]
-        )
-
-    # has[p][c]: the node of posture p has sub-node c (a piece for every leg)
-    has = np.ones((n_post, slots, n), dtype=bool)
-    for p in range(n_post):
-        for c in range(slots):
-            for i, k in enumerate(combos[c]):
-                has[p, c] &= piece_ok[i][k][:, p]
-
-    combo = np.asarray(combos, dtype=np.int64).reshape(slots, n_legs)
+    # per node, each slot's pieces (a cache line or two a node for the pass)
+    bounds, has = _sub_node_bounds(table.angles_lo, table.angles_hi, limits)
+    slots = has.shape[2]
     # both signs from one pass over the pairs
     alive = np.stack([table.may_hold(s) for s in (1, -1)])
-    taken = (alive[:, :, :, None] & has.transpose(2, 0, 1)[None]).reshape(2, -1)
-    possible, counts = _possible_labels_both(
-        pairs, alive, np.ascontiguousarray(has), piece_lo, piece_hi, combo, pq, same_leaf,
-        taken, _TOL,
-    )  # fmt: skip
+    taken = (alive[:, :, :, None] & has[None]).reshape(2, -1)
+    possible, counts = _possible_labels_both(pairs, alive, has, bounds, pq, same_leaf, taken, _TOL)
     return RegionGraph(
         certain=certain.reshape(n, n_post),
         possible=possible.reshape(2, n, n_post * slots),

@@ -22,7 +22,7 @@ from ..hypertree.keys import MAX_KEY_BITS
 from ..hypertree.measurement import locate
 from ..hypertree.status import BOUNDARY, IN, OUT
 from ..hypertree.topology import refined_touching, touching
-from ..hypertree.tree import HyperTree
+from ..hypertree.tree import HyperTree, to_coordinates
 from ..intervals import Interval
 from ..limits import INSIDE
 from ..mechanisms import Mechanism, from_spec
@@ -466,6 +466,33 @@ def _leaf_table(
     return stack_tables(tables).take(source)
 
 
+class _Corners:
+    """The lower (or ``upper``) corners of a tree's leaves, shape (n, k), computed
+    for the rows indexed alone: each row as :meth:`HyperTree.leaves` computes it
+    (the same expression on the same integers, so the same floats). A refined
+    analysis needs those of its new nodes alone."""
+
+    def __init__(self, tree: HyperTree, upper: bool) -> None:
+        self._tree, self._upper = tree, upper
+        self.shape = (len(tree), tree.ndim)
+
+    def __getitem__(self, rows: Any) -> NDArray[np.float64]:
+        tree = self._tree
+        ints = tree.anchors[rows]
+        if self._upper:
+            ints = ints + tree.layout.cell_sizes(tree.levels[rows])
+        return to_coordinates(tree.lo, tree.hi, tree.layout, ints)
+
+
+class _Boxes:
+    """The leaves' boxes, ``lo`` and ``hi`` (see :class:`_Corners`), computed for
+    the leaves asked for alone."""
+
+    def __init__(self, tree: HyperTree) -> None:
+        self.lo = _Corners(tree, False)
+        self.hi = _Corners(tree, True)
+
+
 def _leaf_volumes(tree: HyperTree) -> NDArray[np.float64]:
     """:func:`~moveability.hypertree.measurement.leaf_volumes`, computed once per
     level: a leaf's widths, and so its volume, are those of its level (the same
@@ -576,7 +603,12 @@ def _chain_search(
     seeds: NDArray[np.intp],
     source: NDArray[np.int64],
 ) -> tuple[
-    NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
+    NDArray[np.float64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
 ]:  # pragma: no cover - compiled
     """The breadth-first search of :func:`_necks`, from every seed at once, along
     the pairs whose two leaves are ``through``.
@@ -589,7 +621,8 @@ def _chain_search(
     then the others, each in the order of ``pairs``). A leaf's chain goes on
     through its neighbour one step nearer with the largest index, whose label
     it takes. Every seed is reached at once (0 hops, its own part): a pair of
-    two seeds is no step of a chain, and is left out of the search."""
+    two seeds is no step of a chain, and is left out of the search. Last, the
+    pairs whose two leaves are ``through``, (m, 2) in the order of ``pairs``."""
     n = through.size
     degree = np.zeros(n + 1, dtype=np.int64)
     # one pass over the pairs: those of two leaves `through`, in order (grown by
@@ -605,9 +638,8 @@ def _chain_search(
         if not (through[i] and through[j]):
             continue
         if source[i] >= 0 and source[j] >= 0:
-            if source[i] == source[j]:
-                continue
-            n_seed_meets += 1
+            if source[i] != source[j]:
+                n_seed_meets += 1
         else:
             degree[i + 1] += 1
             degree[j + 1] += 1
@@ -632,8 +664,9 @@ def _chain_search(
     for t in range(n_got):
         i, j = got_a[t], got_b[t]
         if source[i] >= 0 and source[j] >= 0:
-            a[s], b[s] = i, j
-            s += 1
+            if source[i] != source[j]:
+                a[s], b[s] = i, j
+                s += 1
             continue
         a[k], b[k] = i, j
         k += 1
@@ -681,7 +714,11 @@ def _chain_search(
         if la >= 0 and lb >= 0 and la != lb:
             a[k], b[k] = a[t], b[t]
             k += 1
-    return hops, pred, label, a[:k], b[:k]
+    searched = np.empty((n_got, 2), dtype=np.int64)
+    for t in range(n_got):
+        searched[t, 0] = got_a[t]
+        searched[t, 1] = got_b[t]
+    return hops, pred, label, a[:k], b[:k], searched
 
 
 @kernel
@@ -716,7 +753,7 @@ def _necks(
     through = gap | (source >= 0)
     # each leaf labelled with its nearest part, along a shortest chain; the
     # touching leaves of two labels
-    hops, pred, label, a, b = _chain_search(
+    hops, pred, label, a, b, searched = _chain_search(
         np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2),
         through,
         seeds,
@@ -733,8 +770,9 @@ def _necks(
     # walk back from both ends of each kept contact to its parts
     _walk_back(out, np.concatenate([a[near], b[near]]), source, pred)
     # and the gap leaves touching the chains (parts that touch have chains of
-    # their own leaves alone)
-    return _grown(out, pairs) & gap
+    # their own leaves alone): along the pairs searched alone, as the chains and
+    # the gap leaves are all `through`
+    return _grown(out, searched) & gap
 
 
 def count_text(at_least: int, at_most: int | None, noun: str = "region") -> str:
@@ -780,7 +818,9 @@ class Analysis:
         #: as given: one number, or one per pose axis
         self.precision = _as_given(self.precisions)
         self.tree = tree
-        leaves = tree.leaves()
+        # the boxes of the leaves the passes below ask for (a refined analysis:
+        # those of its new nodes), unless every leaf is classified here
+        leaves: Any = tree.leaves() if table is None else _Boxes(tree)
         self.table: SheetTable = (
             classify_sheets(mechanism, leaves.lo, leaves.hi) if table is None else table
         )
@@ -954,7 +994,7 @@ class Analysis:
         nodes, bits, _, faces, _ = self._flows
         at = np.flatnonzero(missing)
         if leaves is None:
-            leaves = self.tree.leaves()
+            leaves = _Boxes(self.tree)
         more_bits, _, more_faces = flow_conditions(
             self.mechanism, leaves.lo, leaves.hi, self.table, nodes[at]
         )
