@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -541,14 +541,15 @@ def _split(
         is_child = kept_keys[at] != finer.keys
     else:
         is_child = np.ones(len(finer), dtype=bool)
-    # one gather from the old rows and the children's
-    stacked = stack_tables([table, children[0]])
-    order = np.empty(len(finer), dtype=np.intp)
-    order[~is_child] = np.flatnonzero(~mask)
-    order[is_child] = len(mask) + np.arange(int(is_child.sum()))
     old_index = np.full(len(finer), -1, dtype=np.intp)
     old_index[~is_child] = np.flatnonzero(~mask)
-    return finer, stacked.take(order), old_index
+    # one gather from the old rows (any row in the children's places), then the
+    # children's rows written over theirs: no copy of the old table stacked
+    out = table.take(np.maximum(old_index, 0))
+    at = np.flatnonzero(is_child)
+    for f in fields(SheetTable):
+        getattr(out, f.name)[at] = getattr(children[0], f.name)
+    return finer, out, old_index
 
 
 def _reachable_contact(
