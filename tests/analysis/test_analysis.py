@@ -350,23 +350,71 @@ def test_leaf_volumes_by_level_are_those_of_each_leaf():
     np.testing.assert_array_equal(_leaf_volumes(tree), leaf_volumes(tree))
 
 
-def test_pieces_written_in_place_are_the_joint_pieces():
-    """The pieces of the region graph written into its arrays are those of
-    joint_pieces, for free, prismatic and limited revolute joints."""
-    from moveability.analysis.regions import _pieces_into, joint_pieces
+def test_sub_node_bounds_are_the_joint_pieces():
+    """The pieces of the region graph's sub-nodes, written node by node (a stroke's
+    in a compiled pass), are those of joint_pieces, for free, prismatic and
+    limited revolute joints: each leg's piece of each slot."""
+    from moveability.analysis.regions import _sub_node_bounds, joint_pieces, split_legs
 
     rng = np.random.default_rng(8)
-    lo = rng.uniform(-10, 30, (200, 2))
+    lo = rng.uniform(-10, 30, (200, 2, 4))
     hi = lo + rng.uniform(0, 8, lo.shape)
     lo[0, 0], hi[1, 1] = np.nan, np.inf
-    for limit in (
+    limits = (
         JointLimit.unlimited(),
         JointLimit(lo=10.0, hi=25.0, periodic=False, prismatic=True),
         JointLimit(lo=-1.0, hi=2.5, periodic=False, prismatic=False),
-    ):
-        out_lo, out_hi = np.empty((2, *lo.shape)), np.empty((2, *lo.shape))
-        ok = _pieces_into(lo, hi, limit, out_lo, out_hi)
-        want_lo, want_hi, want_ok = joint_pieces(lo, hi, limit)
-        np.testing.assert_array_equal(out_lo, want_lo)
-        np.testing.assert_array_equal(out_hi, want_hi)
-        np.testing.assert_array_equal(ok, want_ok)
+        JointLimit(lo=12.0, hi=20.0, periodic=False, prismatic=True),
+    )
+    bounds, has = _sub_node_bounds(lo, hi, limits)
+    split = split_legs(limits)
+    assert split == [2] and bounds.shape == (200, 2, 2, 4, 2)
+    want_has = np.ones(has.shape, dtype=bool)
+    for i, limit in enumerate(limits):
+        want_lo, want_hi, want_ok = joint_pieces(lo[:, :, i], hi[:, :, i], limit)
+        for c in range(2):
+            k = c if i == 2 else 0
+            np.testing.assert_array_equal(bounds[:, :, c, i, 0], want_lo[k])
+            np.testing.assert_array_equal(bounds[:, :, c, i, 1], want_hi[k])
+            want_has[:, :, c] &= want_ok[k]
+    np.testing.assert_array_equal(has, want_has)
+    assert has.any() and not has.all()
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_possible_labels_of_both_signs_are_those_found_apart(seed):
+    """The possible graph's components of both signs from one pass over the pairs
+    are those of each sign found alone (two postures, two slots, a posture pair)."""
+    from moveability.analysis.regions import _possible_labels, _possible_labels_both
+
+    rng = np.random.default_rng([seed, 43])
+    n, n_post, slots, n_legs = 60, 2, 2, 2
+    pairs = np.unique(np.sort(rng.integers(0, n, (150, 2)), axis=1), axis=0)
+    pairs = pairs[pairs[:, 0] < pairs[:, 1]].astype(np.int64)
+    alive = rng.random((2, n, n_post)) < 0.7
+    has = rng.random((n_post, slots, n)) < 0.8
+    lo = rng.uniform(0, 1, (n_legs, 2, n, n_post))
+    hi = lo + rng.uniform(0, 0.6, lo.shape)
+    combo = np.array([[0, 0], [1, 0]], dtype=np.int64)
+    pq = np.array([[0, 1]], dtype=np.int64)
+    same_leaf = rng.random((1, n)) < 0.5
+    taken = (alive[:, :, :, None] & has.transpose(2, 0, 1)[None]).reshape(2, -1)
+    # node by node: each slot's piece of each leg, (n, P, slots, legs, 2)
+    bounds = np.empty((n, n_post, slots, n_legs, 2))
+    for c in range(slots):
+        for leg in range(n_legs):
+            bounds[:, :, c, leg, 0] = lo[leg, combo[c, leg]]
+            bounds[:, :, c, leg, 1] = hi[leg, combo[c, leg]]
+    labels, counts = _possible_labels_both(
+        pairs, alive, np.ascontiguousarray(has.transpose(2, 0, 1)), bounds, pq, same_leaf,
+        taken, 1e-9,
+    )  # fmt: skip
+    for s in range(2):
+        want, count = _possible_labels(
+            pairs, np.ascontiguousarray(alive[s]), has, lo, hi, combo, pq, same_leaf,
+            np.ascontiguousarray(taken[s]), 1e-9,
+        )  # fmt: skip
+        np.testing.assert_array_equal(labels[s], want)
+        assert counts[s] == count
+        # neither everything nor nothing joined
+        assert 1 < count < int(taken[s].sum())

@@ -178,3 +178,43 @@ def test_pack_bits_against_sums_of_powers_of_two(n_flags):
     expected = (flags.astype(np.uint64) * weights).sum(axis=-1, dtype=np.uint64)
     packed = _pack_bits(flags)
     assert packed.dtype == np.uint64 and np.array_equal(packed, expected)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_attachments_of_both_signs_are_those_found_apart(seed: int) -> None:
+    """What the slots wait on, found for two signs from one pass over the face
+    pairs (Attachment.both), is what each attachment finds alone, and so are
+    the nodes attached."""
+    from moveability.analysis.flows import Attachment
+
+    rng = np.random.default_rng([seed, 41])
+    tree = random_tree(rng, (0,) if seed % 2 else ())
+    neighbours = face_neighbours(tree)
+    n, n_post, slots, n_flows = len(tree), 2, 2, 5
+    done = [rng.random((n, n_post)) < 0.3 for _ in range(2)]
+    for d in done:
+        d[tree.status == OUT] = True
+    nodes = np.argwhere(~done[0] | ~done[1])
+    nodes = nodes[rng.random(nodes.shape[0]) < 0.9]
+    m = nodes.shape[0]
+    exists = rng.random((m, slots)) < 0.8
+    spans = np.sort(rng.random((m, slots, 1, 2)), axis=-1)
+    bits = rng.integers(0, 1 << n_flows, size=(2, m, slots)).astype(np.uint64)
+    faces = rng.integers(0, 16, size=(n_flows, m)).astype(np.uint8)
+    faces[0] = 0
+    together = Attachment.both(done, nodes, exists, neighbours, spans)
+    for s, d in enumerate(done):
+        alone = Attachment(d, nodes, exists, neighbours, spans)
+        per_face, never, ptr, row, slot, face = together[s]._waiting
+        want = alone._waiting
+        np.testing.assert_array_equal(per_face, want[0])
+        np.testing.assert_array_equal(never, want[1])
+        # the pointers index the triples of both signs: each slot's run of them
+        np.testing.assert_array_equal(ptr - ptr[0], want[2])
+        for got, expected in zip((row, slot, face), want[3:], strict=True):
+            np.testing.assert_array_equal(got[ptr[0] : ptr[-1]], expected)
+        got_nodes = together[s].run(bits[s], faces)
+        assert np.array_equal(got_nodes, alone.run(bits[s], faces))
+        reference = reference_attached(d, nodes, bits[s], exists, faces, neighbours, spans)
+        assert np.array_equal(got_nodes, reference)
+    assert per_face.any() and ptr[-1] > ptr[0]  # something waits

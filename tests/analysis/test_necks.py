@@ -29,7 +29,7 @@ def test_chain_search_against_scipy_distances(seed):
     n = gap.size
     through = gap | (source >= 0)
     seeds = np.flatnonzero(source >= 0)
-    hops, pred, label, a, b = _chain_search(pairs, through, seeds, source)
+    hops, pred, label, a, b, searched = _chain_search(pairs, through, seeds, source)
 
     # reference: distances from a node joined to every seed, along the pairs of
     # two leaves that are `through`
@@ -37,6 +37,8 @@ def test_chain_search_against_scipy_distances(seed):
     rows = np.concatenate([pairs[use, 0], np.full(seeds.size, n)])
     cols = np.concatenate([pairs[use, 1], seeds])
     graph = coo_matrix((np.ones(rows.size), (rows, cols)), shape=(n + 1, n + 1)).tocsr()
+    # the pairs searched, returned for the growth of the necks: those `through`
+    np.testing.assert_array_equal(searched, pairs[use])
     dist = shortest_path(graph, directed=False, unweighted=True, indices=n)[:n] - 1.0
     np.testing.assert_array_equal(hops, dist)
 
@@ -75,7 +77,9 @@ def test_necks_hold_a_shortest_chain_between_each_two_parts(seed):
     out = _necks(pairs, gap, source, 1)
     assert not (out & ~gap).any()
     through = gap | (source >= 0)
-    hops, pred, label, a, b = _chain_search(pairs, through, np.flatnonzero(source >= 0), source)
+    hops, pred, label, a, b, _ = _chain_search(
+        pairs, through, np.flatnonzero(source >= 0), source
+    )
     if not a.size:
         assert not out.any()
         return

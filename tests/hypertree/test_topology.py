@@ -92,3 +92,34 @@ def test_edge_components_match_scipy(seed):
     expected[order] = np.arange(first.size)
     _, inverse = np.unique(raw[nodes], return_inverse=True)
     np.testing.assert_array_equal(labels[nodes], expected[inverse])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_pairs_merged_as_remapped_are_those_remapped_then_merged(seed):
+    """A coarser tree's pairs between kept leaves, merged with the pairs found as
+    they are remapped, are those remapped first and then merged: kept leaves in
+    order (the merge) or not (the sort it falls back to)."""
+    from moveability.hypertree._kernels import _with_known, _with_remapped, remap_pairs
+
+    rng = np.random.default_rng([seed, 47])
+    n_old, n = 30, 40
+    kept = np.sort(rng.choice(n, size=24, replace=False))
+    new_of_old = np.full(n_old, -1, dtype=np.int64)
+    new_of_old[np.sort(rng.choice(n_old, size=24, replace=False))] = kept
+    if seed % 2:
+        # kept leaves out of order: the pairs remapped are not sorted
+        at = np.flatnonzero(new_of_old >= 0)
+        new_of_old[at[[0, -1]]] = new_of_old[at[[-1, 0]]]
+    old = np.array([(i, j) for i in range(n_old) for j in range(i + 1, n_old)], dtype=np.int64)
+    old = old[rng.random(len(old)) < 0.3]
+    fresh = np.setdiff1d(np.arange(n), kept)
+    a = rng.choice(fresh, 50)
+    b = rng.integers(0, n, 50)
+    keep = a != b
+    found = np.unique(np.sort(np.stack([a[keep], b[keep]], axis=1), axis=1), axis=0)
+    found = found[rng.permutation(len(found))]
+    a, b = np.ascontiguousarray(found[:, 0]), np.ascontiguousarray(found[:, 1])
+    known = remap_pairs(old, new_of_old, np.zeros(n, dtype=bool))
+    want = _with_known(a, b, n, known)
+    np.testing.assert_array_equal(_with_remapped(a, b, n, old, new_of_old), want)
+    assert len(want) > len(found) > 0

@@ -945,6 +945,120 @@ def _dependencies(
     return per_face, never, dep_ptr, dep_row, dep_slot, dep_face
 
 
+@kernel
+def _dependencies_both(
+    pairs: NDArray[np.int64],
+    face_ptr: NDArray[np.int64],
+    node_row: NDArray[np.int64],
+    done: NDArray[np.bool_],
+    slot_done: NDArray[np.bool_],
+    spans: NDArray[np.float64],
+    open_faces: NDArray[np.bool_],
+) -> tuple[
+    NDArray[np.int64],
+    NDArray[np.bool_],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+]:  # pragma: no cover - compiled
+    """:func:`_dependencies` of two attachments of the same nodes (``done`` (2, n, P)
+    and ``slot_done`` (2, m, slots) for each) from one pass over the pairs.
+
+    Returns ``per_face`` (2, faces, m, slots), ``never`` (2, faces, m),
+    ``dep_ptr`` (2, m * slots + 1) and the triples of both, those of the
+    first first: attachment ``s`` waits on slot ``sub`` with the triples
+    ``dep_*[dep_ptr[s, sub]:dep_ptr[s, sub + 1]]``, in the order of
+    :func:`_dependencies`."""
+    n_sets, m, slots = slot_done.shape
+    n_post = done.shape[2]
+    n_faces = face_ptr.size - 1
+    n_legs = spans.shape[2]
+    per_face = np.zeros((n_sets, n_faces, m, slots), dtype=np.int64)
+    never = np.zeros((n_sets, n_faces, m), dtype=np.bool_)
+    dep_ptr = np.zeros((n_sets, m * slots + 1), dtype=np.int64)
+    fill = np.zeros((n_sets, m * slots), dtype=np.int64)
+    cap = max(1024, pairs.shape[0] // 2)
+    got_set = np.empty(cap, dtype=np.int64)
+    got_row = np.empty(cap, dtype=np.int64)
+    got_slot = np.empty(cap, dtype=np.int64)
+    got_face = np.empty(cap, dtype=np.int64)
+    got_sub = np.empty(cap, dtype=np.int64)
+    total = 0
+    for f in range(n_faces):
+        for e in range(face_ptr[f], face_ptr[f + 1]):
+            a, b = pairs[e, 0], pairs[e, 1]
+            for p in range(n_post):
+                ra = node_row[a, p]
+                if ra < 0:
+                    continue
+                rb = node_row[b, p]
+                for s in range(n_sets):
+                    if done[s, b, p]:
+                        continue
+                    if rb < 0:
+                        # a node across that is neither done nor listed never attaches
+                        never[s, f, ra] = True
+                        continue
+                    for ca in range(slots):
+                        if slot_done[s, ra, ca]:
+                            continue
+                        for cb in range(slots):
+                            if slot_done[s, rb, cb]:
+                                continue
+                            # their joint ranges meet
+                            meet = True
+                            for j in range(n_legs):
+                                if not (
+                                    spans[ra, ca, j, 0] <= spans[rb, cb, j, 1] + _SPAN_TOL
+                                    and spans[rb, cb, j, 0] <= spans[ra, ca, j, 1] + _SPAN_TOL
+                                ):
+                                    meet = False
+                            if not meet:
+                                continue
+                            sub = rb * slots + cb
+                            per_face[s, f, ra, ca] += 1
+                            fill[s, sub] += 1
+                            if total == cap:
+                                cap *= 2
+                                got_set = doubled(got_set, total)
+                                got_row = doubled(got_row, total)
+                                got_slot = doubled(got_slot, total)
+                                got_face = doubled(got_face, total)
+                                got_sub = doubled(got_sub, total)
+                            got_set[total] = s
+                            got_row[total] = ra
+                            got_slot[total] = ca
+                            got_face[total] = f
+                            got_sub[total] = sub
+                            total += 1
+    # a counting sort by (set, slot waited on), stable
+    start = 0
+    for s in range(n_sets):
+        dep_ptr[s, 0] = start
+        for sub in range(m * slots):
+            dep_ptr[s, sub + 1] = dep_ptr[s, sub] + fill[s, sub]
+            fill[s, sub] = 0
+        start = dep_ptr[s, m * slots]
+    dep_row = np.empty(total, dtype=np.int64)
+    dep_slot = np.empty(total, dtype=np.int64)
+    dep_face = np.empty(total, dtype=np.int64)
+    for t in range(total):
+        s = got_set[t]
+        sub = got_sub[t]
+        at = dep_ptr[s, sub] + fill[s, sub]
+        dep_row[at] = got_row[t]
+        dep_slot[at] = got_slot[t]
+        dep_face[at] = got_face[t]
+        fill[s, sub] += 1
+    for s in range(n_sets):
+        for f in range(n_faces):
+            for r in range(m):
+                # a face on the edge of the box can never be crossed
+                never[s, f, r] |= open_faces[r, f]
+    return per_face, never, dep_ptr, dep_row, dep_slot, dep_face
+
+
 def slot_spans(
     table: SheetTable, nodes: NDArray[np.intp], limits: tuple[Any, ...]
 ) -> NDArray[np.float64]:
@@ -1026,37 +1140,47 @@ class Attachment:
         neighbours: FaceNeighbours,
         spans: NDArray[np.float64] | None = None,
     ) -> None:
-        n, n_post = done.shape
-        m = nodes.shape[0]
-        slots = exists.shape[1]
-        n_faces = neighbours.open.shape[1]
-        leaf, post = nodes[:, 0].astype(np.int64), nodes[:, 1].astype(np.int64)
-        node_row = np.full((n, n_post), -1, dtype=np.int64)
-        node_row[leaf, post] = np.arange(m)
-        slot_done = np.ascontiguousarray(~exists | done[leaf, post][:, None])
-        if neighbours.flat is not None:
-            all_pairs, face_ptr = neighbours.flat
-        else:
-            face_ptr = np.zeros(n_faces + 1, dtype=np.int64)
-            face_ptr[1:] = np.cumsum([neighbours.pairs[f].shape[0] for f in range(n_faces)])
-            all_pairs = (
-                np.concatenate([neighbours.pairs[f].reshape(-1, 2) for f in range(n_faces)])
-                if n_faces
-                else np.zeros((0, 2), dtype=np.int64)
-            )
-        if spans is None:
-            spans = np.zeros((m, slots, 0, 2))
-        self._done, self._leaf, self._post = done, leaf, post
-        self._slot_done = slot_done
-        self._waiting = _dependencies(
-            np.ascontiguousarray(all_pairs, dtype=np.int64),
-            face_ptr,
-            node_row,
-            np.ascontiguousarray(done),
-            slot_done,
-            np.ascontiguousarray(spans, dtype=np.float64),
-            np.ascontiguousarray(neighbours.open[leaf]),
+        leaf, post, node_row, slot_done, args = _attachment_inputs(
+            [done], nodes, exists, neighbours, spans
         )
+        self._done, self._leaf, self._post = done, leaf, post
+        self._slot_done = slot_done[0]
+        #: what each slot waits on (see :func:`_dependencies`)
+        self._waiting: tuple[NDArray[Any], ...] = _dependencies(
+            args[0], args[1], node_row, np.ascontiguousarray(done), self._slot_done,
+            args[2], args[3],
+        )  # fmt: skip
+
+    @classmethod
+    def both(
+        cls,
+        done: list[NDArray[np.bool_]],
+        nodes: NDArray[np.intp],
+        exists: NDArray[np.bool_],
+        neighbours: FaceNeighbours,
+        spans: NDArray[np.float64] | None = None,
+    ) -> list[Attachment]:
+        """The attachments of two ``done`` (two signs) of the same nodes, what their
+        slots wait on found from one pass over the face pairs: the same as
+        ``[Attachment(d, nodes, exists, neighbours, spans) for d in done]``."""
+        if len(done) != 2:
+            return [cls(d, nodes, exists, neighbours, spans) for d in done]
+        leaf, post, node_row, slot_done, args = _attachment_inputs(
+            done, nodes, exists, neighbours, spans
+        )
+        per_face, never, dep_ptr, dep_row, dep_slot, dep_face = _dependencies_both(
+            args[0], args[1], node_row, np.ascontiguousarray(np.stack(done)), slot_done,
+            args[2], args[3],
+        )  # fmt: skip
+        out = []
+        for s, d in enumerate(done):
+            run = cls.__new__(cls)
+            run._done, run._leaf, run._post = d, leaf, post
+            run._slot_done = slot_done[s]
+            # each one's pointers index the triples of both
+            run._waiting = (per_face[s], never[s], dep_ptr[s], dep_row, dep_slot, dep_face)
+            out.append(run)
+        return out
 
     def run(self, bits: NDArray[np.uint64], faces: NDArray[np.uint8]) -> NDArray[np.bool_]:
         """The nodes attached with the flows ``bits`` (m, slots) and their exit
@@ -1076,6 +1200,48 @@ class Attachment:
         state = self._done.copy()
         state[self._leaf, self._post] |= self._slot_done.all(axis=1)
         return state & ~self._done
+
+
+def _attachment_inputs(
+    done: list[NDArray[np.bool_]],
+    nodes: NDArray[np.intp],
+    exists: NDArray[np.bool_],
+    neighbours: FaceNeighbours,
+    spans: NDArray[np.float64] | None,
+) -> tuple[Any, ...]:
+    """What :func:`_dependencies` takes for attachments of ``done`` (each (n, P)):
+    the nodes' leaves and postures, each node's row (n, P), the slots done of
+    each attachment (len(done), m, slots) and (face pairs, their pointers, the
+    slots' spans, the nodes' open faces)."""
+    n, n_post = done[0].shape
+    m = nodes.shape[0]
+    slots = exists.shape[1]
+    n_faces = neighbours.open.shape[1]
+    leaf, post = nodes[:, 0].astype(np.int64), nodes[:, 1].astype(np.int64)
+    node_row = np.full((n, n_post), -1, dtype=np.int64)
+    node_row[leaf, post] = np.arange(m)
+    slot_done = np.empty((len(done), m, slots), dtype=bool)
+    for s, d in enumerate(done):
+        slot_done[s] = ~exists | d[leaf, post][:, None]
+    if neighbours.flat is not None:
+        all_pairs, face_ptr = neighbours.flat
+    else:
+        face_ptr = np.zeros(n_faces + 1, dtype=np.int64)
+        face_ptr[1:] = np.cumsum([neighbours.pairs[f].shape[0] for f in range(n_faces)])
+        all_pairs = (
+            np.concatenate([neighbours.pairs[f].reshape(-1, 2) for f in range(n_faces)])
+            if n_faces
+            else np.zeros((0, 2), dtype=np.int64)
+        )
+    if spans is None:
+        spans = np.zeros((m, slots, 0, 2))
+    args = (
+        np.ascontiguousarray(all_pairs, dtype=np.int64),
+        face_ptr,
+        np.ascontiguousarray(spans, dtype=np.float64),
+        np.ascontiguousarray(neighbours.open[leaf]),
+    )
+    return leaf, post, node_row, slot_done, args
 
 
 def dead_or_certified(table: SheetTable, s: int, cross_serial: bool = True) -> NDArray[np.bool_]:

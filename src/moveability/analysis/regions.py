@@ -203,6 +203,89 @@ def _possible_labels(
     return relabel_roots(parent, taken)
 
 
+@kernel
+def _sub_nodes_meet(
+    bounds: NDArray[np.float64], i: int, p: int, ci: int, j: int, q: int, cj: int, tol: float
+) -> bool:  # pragma: no cover - compiled
+    """Whether the pieces of sub-node (i, p, ci) and (j, q, cj) overlap on every leg
+    (``bounds``: (n, P, slots, legs, 2), as :func:`_pieces_meet`)."""
+    for leg in range(bounds.shape[3]):
+        if not (bounds[i, p, ci, leg, 0] <= bounds[j, q, cj, leg, 1] + tol):
+            return False
+        if not (bounds[j, q, cj, leg, 0] <= bounds[i, p, ci, leg, 1] + tol):
+            return False
+    return True
+
+
+@kernel
+def _possible_labels_both(
+    pairs: NDArray[np.int64],
+    alive: NDArray[np.bool_],
+    has: NDArray[np.bool_],
+    bounds: NDArray[np.float64],
+    pq: NDArray[np.int64],
+    same_leaf: NDArray[np.bool_],
+    taken: NDArray[np.bool_],
+    tol: float,
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
+    """:func:`_possible_labels` of both signs from one pass over the pairs: ``alive``
+    (2, n, P) and ``taken`` (2, sub-nodes) per sign; the sub-nodes that exist,
+    ``has`` (n, P, slots), and their pieces' bounds, ``bounds`` (n, P, slots,
+    legs, 2: each leg's piece of the slot), node by node (one or two cache
+    lines a node); whether two pieces overlap is found once for both signs.
+    Returns the labels (2, sub-nodes) and their counts (2,); each sign's
+    components are those of its own graph (a union-find's partition does not
+    depend on the order of its unions, and the labels are numbered by first
+    sub-node)."""
+    n, n_post = alive.shape[1], alive.shape[2]
+    slots = has.shape[2]
+    parent0 = np.arange(n * n_post * slots)
+    parent1 = np.arange(n * n_post * slots)
+    for t in range(pairs.shape[0]):
+        i, j = pairs[t, 0], pairs[t, 1]
+        for p in range(n_post):
+            both0 = alive[0, i, p] and alive[0, j, p]
+            both1 = alive[1, i, p] and alive[1, j, p]
+            if not (both0 or both1):
+                continue
+            for ci in range(slots):
+                if not has[i, p, ci]:
+                    continue
+                for cj in range(slots):
+                    if has[j, p, cj] and _sub_nodes_meet(bounds, i, p, ci, j, p, cj, tol):
+                        u = (i * n_post + p) * slots + ci
+                        v = (j * n_post + p) * slots + cj
+                        if both0:
+                            union_sets(parent0, u, v)
+                        if both1:
+                            union_sets(parent1, u, v)
+    for k in range(pq.shape[0]):
+        p, q = pq[k, 0], pq[k, 1]
+        for i in range(n):
+            if not same_leaf[k, i]:
+                continue
+            both0 = alive[0, i, p] and alive[0, i, q]
+            both1 = alive[1, i, p] and alive[1, i, q]
+            if not (both0 or both1):
+                continue
+            for cp in range(slots):
+                if not has[i, p, cp]:
+                    continue
+                for cq in range(slots):
+                    if has[i, q, cq] and _sub_nodes_meet(bounds, i, p, cp, i, q, cq, tol):
+                        u = (i * n_post + p) * slots + cp
+                        v = (i * n_post + q) * slots + cq
+                        if both0:
+                            union_sets(parent0, u, v)
+                        if both1:
+                            union_sets(parent1, u, v)
+    labels = np.empty((2, parent0.size), dtype=np.int64)
+    counts = np.zeros(2, dtype=np.int64)
+    labels[0], counts[0] = relabel_roots(parent0, taken[0])
+    labels[1], counts[1] = relabel_roots(parent1, taken[1])
+    return labels, counts
+
+
 def _posture_pairs(postures: NDArray[np.int64]) -> list[tuple[int, int, NDArray[np.bool_]]]:
     """Pairs of postures with the legs on which they differ."""
     out = []
@@ -249,31 +332,73 @@ def joint_pieces(
     return np.stack([lo0, lo1]), np.stack([hi0, hi1]), np.stack([ok0, ok1])
 
 
-def _pieces_into(
+@kernel
+def _stroke_bounds(
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
-    limit: JointLimit,
-    out_lo: NDArray[np.float64],
-    out_hi: NDArray[np.float64],
-) -> NDArray[np.bool_]:
-    """:func:`joint_pieces`, its bounds written into ``out_lo`` and ``out_hi`` (2, ...):
-    the same numbers, with no arrays in between for free and prismatic joints."""
-    if limit.periodic:
-        out_lo[...] = -np.inf
-        out_hi[...] = np.inf
-        full = np.ones((2, *lo.shape), dtype=bool)
-        full[1] = False
-        return full
-    if limit.prismatic:
-        one = np.zeros((2, *lo.shape), dtype=bool)
-        one[0] = (lo <= limit.hi + _TOL) & (hi >= limit.lo - _TOL)
-        np.maximum(lo, limit.lo, out=out_lo[0])
-        out_lo[1] = limit.lo
-        np.minimum(hi, limit.hi, out=out_hi[0])
-        out_hi[1] = limit.lo
-        return one
-    out_lo[...], out_hi[...], ok = joint_pieces(lo, hi, limit)
-    return ok
+    strokes: NDArray[np.bool_],
+    stop_lo: NDArray[np.float64],
+    stop_hi: NDArray[np.float64],
+    bounds: NDArray[np.float64],
+    has: NDArray[np.bool_],
+) -> None:  # pragma: no cover - compiled
+    """The pieces of the prismatic joints (legs ``strokes``, strokes ``[stop_lo,
+    stop_hi]``) of the (n, P, legs) enclosures, as :func:`joint_pieces` gives
+    them (a NaN bound stays NaN, as in ``np.maximum``): piece 0 into every slot
+    of ``bounds`` (n, P, slots, legs, 2; a stroke has one piece), the slots
+    where it is missing cleared in ``has`` (n, P, slots). One pass."""
+    n, n_post, slots, n_legs = bounds.shape[0], bounds.shape[1], bounds.shape[2], bounds.shape[3]
+    for i in range(n):
+        for p in range(n_post):
+            for leg in range(n_legs):
+                if not strokes[leg]:
+                    continue
+                a = lo[i, p, leg]
+                b = hi[i, p, leg]
+                ok = a <= stop_hi[leg] + _TOL and b >= stop_lo[leg] - _TOL
+                piece_lo = stop_lo[leg] if a < stop_lo[leg] else a
+                piece_hi = stop_hi[leg] if b > stop_hi[leg] else b
+                for c in range(slots):
+                    bounds[i, p, c, leg, 0] = piece_lo
+                    bounds[i, p, c, leg, 1] = piece_hi
+                    if not ok:
+                        has[i, p, c] = False
+
+
+def _sub_node_bounds(
+    angles_lo: NDArray[np.float64],
+    angles_hi: NDArray[np.float64],
+    limits: tuple[JointLimit, ...],
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """The pieces of the sub-nodes of the (n, P, legs) enclosures, node by node:
+    ``bounds`` (n, P, slots, legs, 2), each leg's piece (:func:`joint_pieces`)
+    of the slot (see :func:`split_legs`), and ``has`` (n, P, slots), the
+    sub-nodes whose every leg's piece exists. Prismatic joints in one compiled
+    pass, the others from :func:`joint_pieces`."""
+    n, n_post, n_legs = angles_lo.shape
+    split = split_legs(limits)
+    slots = 1 << len(split)
+    bounds = np.empty((n, n_post, slots, n_legs, 2))
+    has = np.ones((n, n_post, slots), dtype=bool)
+    strokes = np.array([lim.prismatic and not lim.periodic for lim in limits], dtype=bool)
+    if strokes.any():
+        _stroke_bounds(
+            np.ascontiguousarray(angles_lo, dtype=np.float64),
+            np.ascontiguousarray(angles_hi, dtype=np.float64),
+            strokes,
+            np.array([float(lim.lo) for lim in limits]),
+            np.array([float(lim.hi) for lim in limits]),
+            bounds,
+            has,
+        )
+    for i in np.flatnonzero(~strokes).tolist():
+        lo, hi, ok = joint_pieces(angles_lo[:, :, i], angles_hi[:, :, i], limits[i])
+        for c in range(slots):
+            k = (c >> split.index(i)) & 1 if i in split else 0
+            bounds[:, :, c, i, 0] = lo[k]
+            bounds[:, :, c, i, 1] = hi[k]
+            has[:, :, c] &= ok[k]
+    return bounds, has
 
 
 def split_legs(limits: tuple[JointLimit, ...]) -> list[int]:
@@ -343,51 +468,18 @@ def region_graph(
     # and, one turn on, near lo): a path never passes from one to the other. Each
     # node is split by the piece of [lo, hi] each leg's value lies in, and pieces
     # are joined only where they overlap.
-    n_legs = table.angles_lo.shape[2]
-    split = split_legs(limits)
-    slots = 1 << len(split)
-    combos = [
-        [(c >> split.index(i)) & 1 if i in split else 0 for i in range(n_legs)]
-        for c in range(slots)
-    ]
-    # per leg, the two pieces' bounds written straight into the arrays of the
-    # compiled pass, (legs, 2, n, P), and where each piece exists
-    piece_lo = np.empty((n_legs, 2, n, n_post))
-    piece_hi = np.empty((n_legs, 2, n, n_post))
-    piece_ok = []
-    for i in range(n_legs):
-        piece_ok.append(
-            _pieces_into(
-                table.angles_lo[:, :, i], table.angles_hi[:, :, i], limits[i], piece_lo[i],
-                piece_hi[i],
-            )
-        )  # fmt: skip
-
-    # has[p][c]: the node of posture p has sub-node c (a piece for every leg)
-    has = np.ones((n_post, slots, n), dtype=bool)
-    for p in range(n_post):
-        for c in range(slots):
-            for i, k in enumerate(combos[c]):
-                has[p, c] &= piece_ok[i][k][:, p]
-
-    combo = np.asarray(combos, dtype=np.int64).reshape(slots, n_legs)
-    has_c = np.ascontiguousarray(has)
-    possible = np.full((2, n * n_post * slots), -1, dtype=np.int64)
-    counts = []
-    for row, s in enumerate((1, -1)):
-        alive = np.ascontiguousarray(table.may_hold(s))
-        taken = alive[:, :, None] & has.transpose(2, 0, 1)
-        labels, count = _possible_labels(
-            pairs, alive, has_c, piece_lo, piece_hi, combo, pq, same_leaf,
-            np.ascontiguousarray(taken.ravel()), _TOL,
-        )  # fmt: skip
-        possible[row] = labels
-        counts.append(int(count))
+    # per node, each slot's pieces (a cache line or two a node for the pass)
+    bounds, has = _sub_node_bounds(table.angles_lo, table.angles_hi, limits)
+    slots = has.shape[2]
+    # both signs from one pass over the pairs
+    alive = np.stack([table.may_hold(s) for s in (1, -1)])
+    taken = (alive[:, :, :, None] & has[None]).reshape(2, -1)
+    possible, counts = _possible_labels_both(pairs, alive, has, bounds, pq, same_leaf, taken, _TOL)
     return RegionGraph(
         certain=certain.reshape(n, n_post),
         possible=possible.reshape(2, n, n_post * slots),
         slots=slots,
         certain_sign=certain_sign,
         certain_edges=certain_edges,
-        n_possible=(counts[0], counts[1]),
+        n_possible=(int(counts[0]), int(counts[1])),
     )

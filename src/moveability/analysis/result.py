@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -22,7 +22,7 @@ from ..hypertree.keys import MAX_KEY_BITS
 from ..hypertree.measurement import locate
 from ..hypertree.status import BOUNDARY, IN, OUT
 from ..hypertree.topology import refined_touching, touching
-from ..hypertree.tree import HyperTree
+from ..hypertree.tree import HyperTree, to_coordinates
 from ..intervals import Interval
 from ..limits import INSIDE
 from ..mechanisms import Mechanism, from_spec
@@ -466,6 +466,33 @@ def _leaf_table(
     return stack_tables(tables).take(source)
 
 
+class _Corners:
+    """The lower (or ``upper``) corners of a tree's leaves, shape (n, k), computed
+    for the rows indexed alone: each row as :meth:`HyperTree.leaves` computes it
+    (the same expression on the same integers, so the same floats). A refined
+    analysis needs those of its new nodes alone."""
+
+    def __init__(self, tree: HyperTree, upper: bool) -> None:
+        self._tree, self._upper = tree, upper
+        self.shape = (len(tree), tree.ndim)
+
+    def __getitem__(self, rows: Any) -> NDArray[np.float64]:
+        tree = self._tree
+        ints = tree.anchors[rows]
+        if self._upper:
+            ints = ints + tree.layout.cell_sizes(tree.levels[rows])
+        return to_coordinates(tree.lo, tree.hi, tree.layout, ints)
+
+
+class _Boxes:
+    """The leaves' boxes, ``lo`` and ``hi`` (see :class:`_Corners`), computed for
+    the leaves asked for alone."""
+
+    def __init__(self, tree: HyperTree) -> None:
+        self.lo = _Corners(tree, False)
+        self.hi = _Corners(tree, True)
+
+
 def _leaf_volumes(tree: HyperTree) -> NDArray[np.float64]:
     """:func:`~moveability.hypertree.measurement.leaf_volumes`, computed once per
     level: a leaf's widths, and so its volume, are those of its level (the same
@@ -514,14 +541,15 @@ def _split(
         is_child = kept_keys[at] != finer.keys
     else:
         is_child = np.ones(len(finer), dtype=bool)
-    # one gather from the old rows and the children's
-    stacked = stack_tables([table, children[0]])
-    order = np.empty(len(finer), dtype=np.intp)
-    order[~is_child] = np.flatnonzero(~mask)
-    order[is_child] = len(mask) + np.arange(int(is_child.sum()))
     old_index = np.full(len(finer), -1, dtype=np.intp)
     old_index[~is_child] = np.flatnonzero(~mask)
-    return finer, stacked.take(order), old_index
+    # one gather from the old rows (any row in the children's places), then the
+    # children's rows written over theirs: no copy of the old table stacked
+    out = table.take(np.maximum(old_index, 0))
+    at = np.flatnonzero(is_child)
+    for f in fields(SheetTable):
+        getattr(out, f.name)[at] = getattr(children[0], f.name)
+    return finer, out, old_index
 
 
 def _reachable_contact(
@@ -531,7 +559,9 @@ def _reachable_contact(
     their common boundary holds a pose that every leg reaches (every leg regular
     there but at most one, which certainly holds reachable poses there)."""
     out = np.zeros(pairs.shape[0], dtype=bool)
-    both = table.group[pairs[:, 0]].any(axis=1) & table.group[pairs[:, 1]].any(axis=1)
+    # per leaf first: one gather of a flag per pair end, not of a row
+    holds: NDArray[np.bool_] = np.asarray(table.group.any(axis=1), dtype=bool)
+    both = holds[pairs[:, 0]] & holds[pairs[:, 1]]
     idx = np.flatnonzero(both)
     if not idx.size:
         return out
@@ -574,7 +604,12 @@ def _chain_search(
     seeds: NDArray[np.intp],
     source: NDArray[np.int64],
 ) -> tuple[
-    NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
+    NDArray[np.float64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64],
 ]:  # pragma: no cover - compiled
     """The breadth-first search of :func:`_necks`, from every seed at once, along
     the pairs whose two leaves are ``through``.
@@ -587,7 +622,8 @@ def _chain_search(
     then the others, each in the order of ``pairs``). A leaf's chain goes on
     through its neighbour one step nearer with the largest index, whose label
     it takes. Every seed is reached at once (0 hops, its own part): a pair of
-    two seeds is no step of a chain, and is left out of the search."""
+    two seeds is no step of a chain, and is left out of the search. Last, the
+    pairs whose two leaves are ``through``, (m, 2) in the order of ``pairs``."""
     n = through.size
     degree = np.zeros(n + 1, dtype=np.int64)
     # one pass over the pairs: those of two leaves `through`, in order (grown by
@@ -603,9 +639,8 @@ def _chain_search(
         if not (through[i] and through[j]):
             continue
         if source[i] >= 0 and source[j] >= 0:
-            if source[i] == source[j]:
-                continue
-            n_seed_meets += 1
+            if source[i] != source[j]:
+                n_seed_meets += 1
         else:
             degree[i + 1] += 1
             degree[j + 1] += 1
@@ -630,8 +665,9 @@ def _chain_search(
     for t in range(n_got):
         i, j = got_a[t], got_b[t]
         if source[i] >= 0 and source[j] >= 0:
-            a[s], b[s] = i, j
-            s += 1
+            if source[i] != source[j]:
+                a[s], b[s] = i, j
+                s += 1
             continue
         a[k], b[k] = i, j
         k += 1
@@ -679,7 +715,11 @@ def _chain_search(
         if la >= 0 and lb >= 0 and la != lb:
             a[k], b[k] = a[t], b[t]
             k += 1
-    return hops, pred, label, a[:k], b[:k]
+    searched = np.empty((n_got, 2), dtype=np.int64)
+    for t in range(n_got):
+        searched[t, 0] = got_a[t]
+        searched[t, 1] = got_b[t]
+    return hops, pred, label, a[:k], b[:k], searched
 
 
 @kernel
@@ -714,7 +754,7 @@ def _necks(
     through = gap | (source >= 0)
     # each leaf labelled with its nearest part, along a shortest chain; the
     # touching leaves of two labels
-    hops, pred, label, a, b = _chain_search(
+    hops, pred, label, a, b, searched = _chain_search(
         np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2),
         through,
         seeds,
@@ -731,8 +771,9 @@ def _necks(
     # walk back from both ends of each kept contact to its parts
     _walk_back(out, np.concatenate([a[near], b[near]]), source, pred)
     # and the gap leaves touching the chains (parts that touch have chains of
-    # their own leaves alone)
-    return _grown(out, pairs) & gap
+    # their own leaves alone): along the pairs searched alone, as the chains and
+    # the gap leaves are all `through`
+    return _grown(out, searched) & gap
 
 
 def count_text(at_least: int, at_most: int | None, noun: str = "region") -> str:
@@ -778,7 +819,9 @@ class Analysis:
         #: as given: one number, or one per pose axis
         self.precision = _as_given(self.precisions)
         self.tree = tree
-        leaves = tree.leaves()
+        # the boxes of the leaves the passes below ask for (a refined analysis:
+        # those of its new nodes), unless every leaf is classified here
+        leaves: Any = tree.leaves() if table is None else _Boxes(tree)
         self.table: SheetTable = (
             classify_sheets(mechanism, leaves.lo, leaves.hi) if table is None else table
         )
@@ -937,9 +980,7 @@ class Analysis:
         after the first has them all), so the result is exactly that of all the
         flows."""
         nodes, bits, exists, faces, _ = self._flows
-        runs = [
-            Attachment(d, nodes, exists, self._neighbours, self._spans) for d in done
-        ]
+        runs = Attachment.both(done, nodes, exists, self._neighbours, self._spans)
         attached = [a.run(bits[row], faces) for a, row in zip(runs, rows, strict=True)]
         missing = self._left_open(done, attached) & ~self._complete_flows
         if not missing.any():
@@ -954,7 +995,7 @@ class Analysis:
         nodes, bits, _, faces, _ = self._flows
         at = np.flatnonzero(missing)
         if leaves is None:
-            leaves = self.tree.leaves()
+            leaves = _Boxes(self.tree)
         more_bits, _, more_faces = flow_conditions(
             self.mechanism, leaves.lo, leaves.hi, self.table, nodes[at]
         )

@@ -201,6 +201,30 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.mechanisms._delta_kernels.mean_value_bounds": [
         (R2, R2, array(F8, 3), array(I8), array(F8, 4), R2, W1, W1)
     ],
+    "moveability.analysis.regions._stroke_bounds": [
+        (
+            array(F8, 3), array(F8, 3), array(B1), array(F8), array(F8),
+            array(F8, 5, out=True), array(B1, 3, out=True),
+        )
+    ],
+    "moveability.analysis.regions._possible_labels_both": [
+        (
+            array(I8, 2), array(B1, 3), array(B1, 3), array(F8, 5), array(I8, 2),
+            array(B1, 2), array(B1, 2), F8,
+        )
+    ],
+    "moveability.hypertree._kernels.mark_sources": [
+        (array(I8, 2), array(I8), array(B1, out=True))
+    ],
+    "moveability.hypertree._kernels._remapped_merged": [
+        (array(I8, 2), array(I8, 2), array(I8))
+    ],
+    "moveability.analysis.flows._dependencies_both": [
+        (
+            array(I8, 2), array(I8), array(I8, 2), array(B1, 3), array(B1, 3),
+            array(F8, 4), array(B1, 2),
+        )
+    ],
 }
 
 

@@ -20,6 +20,8 @@ __all__ = [
     "adjacent_pairs",
     "edge_components",
     "label_leaves",
+    "mark_sources",
+    "refined_pairs",
     "remap_pairs",
 ]
 
@@ -424,6 +426,106 @@ def remap_pairs(
         elif j >= 0:
             sources[j] = True
     return out[:k]
+
+
+@kernel
+def mark_sources(
+    pairs: NDArray[np.int64], new_of_old: NDArray[np.int64], sources: NDArray[np.bool_]
+) -> None:  # pragma: no cover - compiled
+    """The kept leaf of each of a coarser tree's pairs with a split leaf marked in
+    ``sources`` (as :func:`remap_pairs` does), without the pairs remapped."""
+    for t in range(pairs.shape[0]):
+        i = new_of_old[pairs[t, 0]]
+        j = new_of_old[pairs[t, 1]]
+        if i >= 0 and j < 0:
+            sources[i] = True
+        elif j >= 0 and i < 0:
+            sources[j] = True
+
+
+@kernel
+def _remapped_merged(
+    found: NDArray[np.int64], old: NDArray[np.int64], new_of_old: NDArray[np.int64]
+) -> tuple[NDArray[np.int64], bool]:  # pragma: no cover - compiled
+    """:func:`_merged_pairs` of the pairs ``found`` (in sorted order) and the coarser
+    tree's pairs ``old`` between kept leaves, by their new indices
+    (:func:`remap_pairs`), in one pass with no list of the latter; False (and
+    no pairs) when those are not ``i < j`` in strictly increasing order."""
+    m1, m2 = found.shape[0], old.shape[0]
+    # at most every pair of both: the pages past those written are never touched
+    out = np.empty((m1 + m2, 2), dtype=np.int64)
+    s = u = 0
+    last_i = last_j = -1
+    for t in range(m2):
+        i = new_of_old[old[t, 0]]
+        j = new_of_old[old[t, 1]]
+        if i < 0 or j < 0:
+            continue
+        if i >= j or i < last_i or (i == last_i and j <= last_j):
+            return out[:0], False
+        last_i, last_j = i, j
+        # the found pairs before it (a pair in both lists comes second, as in a merge)
+        while s < m1 and (found[s, 0] < i or (found[s, 0] == i and found[s, 1] < j)):
+            out[u, 0] = found[s, 0]
+            out[u, 1] = found[s, 1]
+            s += 1
+            u += 1
+        out[u, 0] = i
+        out[u, 1] = j
+        u += 1
+    while s < m1:
+        out[u, 0] = found[s, 0]
+        out[u, 1] = found[s, 1]
+        s += 1
+        u += 1
+    return out[:u], True
+
+
+def _with_remapped(
+    a: NDArray[np.int64],
+    b: NDArray[np.int64],
+    n: int,
+    old: NDArray[np.int64],
+    new_of_old: NDArray[np.int64],
+) -> NDArray[np.int64]:
+    """:func:`_with_known` of the pairs found and a coarser tree's pairs ``old``
+    between kept leaves (:func:`remap_pairs`), merged as they are remapped."""
+    merged, ok = _remapped_merged(_sorted_pairs(a, b, n), old, new_of_old)
+    if ok:
+        return merged
+    known = remap_pairs(old, new_of_old, np.zeros(new_of_old.size, dtype=np.bool_))
+    return _with_known(a, b, n, known)
+
+
+def refined_pairs(
+    keys: NDArray[np.uint64],
+    levels: NDArray[np.uint8],
+    chosen: NDArray[np.bool_],
+    layout: KeyLayout,
+    periodic: tuple[int, ...],
+    directions: NDArray[np.int8],
+    fresh: NDArray[np.bool_],
+    old: tuple[NDArray[np.int64], NDArray[np.int64]],
+    new_of_old: NDArray[np.int64],
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """:func:`adjacent_and_face_pairs` of a refined tree whose coarser tree's pairs
+    of both kinds ``old`` are known (``new_of_old``: each old leaf's new index,
+    -1 where split; ``fresh``: the new leaves): the new leaves and the kept
+    ones that touched a split one probe, and the old pairs between kept leaves
+    are merged with those found as they are remapped."""
+    old_all = np.ascontiguousarray(old[0], dtype=np.int64).reshape(-1, 2)
+    old_faces = np.ascontiguousarray(old[1], dtype=np.int64).reshape(-1, 2)
+    new_of_old = np.ascontiguousarray(new_of_old, dtype=np.int64)
+    sources = fresh.copy()
+    mark_sources(old_all, new_of_old, sources)
+    n = keys.size
+    a, b, face = _pairs(
+        keys, levels, chosen, *_layout_arrays(layout, periodic), directions, sources, fresh
+    )
+    return (
+        _with_remapped(a, b, n, old_all, new_of_old),
+        _with_remapped(a[face], b[face], n, old_faces, new_of_old),
+    )
 
 
 def _layout_arrays(

@@ -27,6 +27,7 @@ from ._kernels import (
     adjacent_pairs,
     edge_components,
     label_leaves,
+    refined_pairs,
     remap_pairs,
 )
 from .status import IN, status_mask
@@ -252,23 +253,16 @@ def refined_touching(
         return touching(tree, status=status)
     chosen, kept, new_of_old = refined
     # the kept leaves that touched a split one probe: those by a face among them
-    sources = ~kept
-    known = remap_pairs(np.asarray(old_pairs, dtype=np.int64).reshape(-1, 2), new_of_old, sources)
-    known_faces = remap_pairs(
-        np.asarray(old_face_pairs, dtype=np.int64).reshape(-1, 2),
-        new_of_old,
-        np.zeros(len(tree), dtype=bool),
-    )
-    pairs, faces = adjacent_and_face_pairs(
+    pairs, faces = refined_pairs(
         tree.keys,
         tree.levels,
         chosen,
         tree.layout,
         tree.periodic,
         directions(tree.ndim, tree.ndim),
-        sources=sources,
-        fresh=~kept,
-        known=(known, known_faces),
+        ~kept,
+        (np.asarray(old_pairs), np.asarray(old_face_pairs)),
+        new_of_old,
     )
     return pairs.astype(np.intp, copy=False), faces.astype(np.intp, copy=False)
 
