@@ -302,8 +302,6 @@ def _velocities(n: int, seed: int) -> list[list[Interval]]:
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the references' infinities
 @pytest.mark.parametrize("name", sorted(DESIGNS))
 def test_fold_flow_bit_for_bit(name: str) -> None:
-    from moveability.mechanisms.base import FOLD_INNER, FOLD_OUTER
-
     m = DESIGNS[name]
     lo, hi = _leg_boxes(m, seed=len(name) + 11)
     n = lo.shape[0]
@@ -318,15 +316,70 @@ def test_fold_flow_bit_for_bit(name: str) -> None:
                 want_keeps, want_rate = leg._fold_flow_intervals(
                     lo, hi, status, branch, velocity, cache=reference
                 )
-                assert np.array_equal(keeps, want_keeps)
-                _same(rate, want_rate)
-                folds = (status == FOLD_OUTER) | (status == FOLD_INNER)
-                kept += int((keeps & folds).sum())
-            # without a cache, and of one box
-            keeps, rate = leg.fold_flow(lo[:1], hi[:1], status[:1], branch, velocity)
-            want_keeps, want_rate = leg._fold_flow_intervals(
-                lo[:1], hi[:1], status[:1], branch, velocity
-            )
-            assert np.array_equal(keeps, want_keeps)
-            _same(rate, want_rate)
+                _same_fold_flow(keeps, rate, want_keeps, want_rate, status)
+                kept += int(keeps.sum())
+            # without a cache, and of one box of each kind
+            velocity = [Interval(np.array(1.0)), Interval(np.array(0.0)), Interval(-0.5, 0.25)]
+            for k in range(5):
+                at = np.flatnonzero(status == status[k * 17])[:1]
+                keeps, rate = leg.fold_flow(lo[at], hi[at], status[at], branch, velocity)
+                want_keeps, want_rate = leg._fold_flow_intervals(
+                    lo[at], hi[at], status[at], branch, velocity
+                )
+                _same_fold_flow(keeps, rate, want_keeps, want_rate, status[at])
     assert kept > 0
+
+
+def _same_fold_flow(
+    keeps: np.ndarray,
+    rate: Interval,
+    want_keeps: np.ndarray,
+    want_rate: Interval,
+    status: np.ndarray,
+) -> None:
+    """The compiled fold flow is the reference's where the leg may fold; elsewhere
+    it keeps nothing (as the reference) and its rate is the whole line."""
+    from moveability.mechanisms.base import FOLD_INNER, FOLD_OUTER
+
+    folds = (status == FOLD_OUTER) | (status == FOLD_INNER)
+    assert np.array_equal(keeps, want_keeps)
+    assert not keeps[~folds].any()
+    _same(
+        Interval(rate.lo[folds], rate.hi[folds]), Interval(want_rate.lo[folds], want_rate.hi[folds])
+    )
+    assert (rate.lo[~folds] == -np.inf).all() and (rate.hi[~folds] == np.inf).all()
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the references' infinities
+@pytest.mark.parametrize("name", sorted(DESIGNS))
+def test_det_a_boxes_of_the_sheets_angles(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """With the angles as the sheets take them (each leg's branch where it is
+    regular, else the hull), every posture's mean-value form comes from one
+    pass for all postures (``mean_value_all``; the one-posture kernel must not
+    run), and is the reference's, bit for bit."""
+    from moveability.mechanisms import _delta_kernels
+
+    def forbidden(*args: object) -> None:
+        raise AssertionError("mean_value_bounds ran")
+
+    d = DESIGNS[name]
+    m = Delta(d.base_radius, d.platform_radius, d.arm, d.rod)  # no kept boxes
+    lo, hi = _leg_boxes(m, seed=len(name) + 3)
+    reaches = [leg.reach(lo, hi) for leg in m.delta_legs]
+    monkeypatch.setattr(_delta_kernels, "mean_value_bounds", forbidden)
+    narrowed = 0
+    for posture in range(m.postures.shape[0]):
+        angles = []
+        for i, r in enumerate(reaches):
+            branch = r.branches[int(m.postures[posture][i])]
+            regular = r.status == REGULAR
+            angles.append(
+                Interval(
+                    np.where(regular, branch.lo, r.hull.lo), np.where(regular, branch.hi, r.hull.hi)
+                )
+            )
+        got = m.det_a_boxes(lo, hi, angles, posture=posture)
+        _same(got, m._det_a_boxes_intervals(lo, hi, angles, posture=posture))
+        plain = m.det_a_boxes(lo, hi, angles)
+        narrowed += int(((got.lo != plain.lo) | (got.hi != plain.hi)).sum())
+    assert narrowed > 100

@@ -579,8 +579,10 @@ class DeltaLeg:
         does not depend on the velocity.
 
         Compiled (:func:`._delta_leg_kernels.fold_terms_prepare`,
-        ``fold_terms_finish`` and ``fold_rate_bounds``): the results of
-        :meth:`_fold_flow_intervals`, bit for bit.
+        ``fold_terms_finish`` and ``fold_rate_bounds``), over the boxes where the
+        leg may fold only: there the results of :meth:`_fold_flow_intervals`,
+        bit for bit; elsewhere ``keeps`` is false (as there) and the rate the
+        whole line (the reference's rate there is meaningless).
         """
         boxes = _pose_boxes(lo, hi)
         if boxes is None or len(velocity) != 3:
@@ -589,20 +591,26 @@ class DeltaLeg:
         parts = [flat_bounds(v, n) for v in velocity]
         if parts[0] is None or parts[1] is None or parts[2] is None:
             return self._fold_flow_intervals(lo, hi, status, branch, velocity, cache)
-        terms = None if cache is None else cache.get("fold_compiled")
-        if terms is None:
-            terms = self._fold_terms_compiled(*boxes)
-            if cache is not None:
-                cache["fold_compiled"] = terms
-        v_lo = np.stack([parts[0][0], parts[1][0], parts[2][0]])
-        v_hi = np.stack([parts[0][1], parts[1][1], parts[2][1]])
         codes = np.ascontiguousarray(np.broadcast_to(status, (n,)), dtype=np.uint8)
-        keeps = np.empty(n, dtype=bool)
-        out_lo, out_hi = np.empty(n), np.empty(n)
+        kept = None if cache is None else cache.get("fold_compiled")
+        if kept is None or not np.array_equal(kept[0], codes):
+            folds = np.flatnonzero((codes == FOLD_OUTER) | (codes == FOLD_INNER))
+            terms = self._fold_terms_compiled(boxes[0][folds], boxes[1][folds])
+            kept = (codes.copy(), folds, terms)
+            if cache is not None:
+                cache["fold_compiled"] = kept
+        _, folds, terms = kept
+        v_lo = np.stack([parts[0][0][folds], parts[1][0][folds], parts[2][0][folds]])
+        v_hi = np.stack([parts[0][1][folds], parts[1][1][folds], parts[2][1][folds]])
+        sub_keeps = np.empty(folds.size, dtype=bool)
+        sub_lo, sub_hi = np.empty(folds.size), np.empty(folds.size)
         leg_kernels.fold_rate_bounds(
-            terms[0], terms[1], v_lo, v_hi, codes, _CODES, 1.0 if branch == 0 else -1.0,
-            self.constants, keeps, out_lo, out_hi,
+            terms[0], terms[1], v_lo, v_hi, codes[folds], _CODES, 1.0 if branch == 0 else -1.0,
+            self.constants, sub_keeps, sub_lo, sub_hi,
         )  # fmt: skip
+        keeps = np.zeros(n, dtype=bool)
+        out_lo, out_hi = np.full(n, -_INF), np.full(n, _INF)
+        keeps[folds], out_lo[folds], out_hi[folds] = sub_keeps, sub_lo, sub_hi
         return keeps, Interval(out_lo, out_hi)
 
     def _fold_terms_compiled(self, lo: Array, hi: Array) -> tuple[Array, Array]:
@@ -722,6 +730,12 @@ def _dot(a: list[Interval], b: list[Interval]) -> Interval:
 
 def _minus(a: list[Interval], b: list[Interval]) -> list[Interval]:
     return [x - y for x, y in zip(a, b, strict=True)]
+
+
+def _same_bits(a: Array, b: Array) -> bool:
+    """Whether two float arrays hold the same floats, bit for bit."""
+    a, b = np.ascontiguousarray(a), np.ascontiguousarray(b)
+    return a.shape == b.shape and bool(np.array_equal(a.view(np.uint64), b.view(np.uint64)))
 
 
 def _no_nan(x: Interval) -> Interval:
@@ -984,12 +998,51 @@ class Delta(Mechanism):
             return Interval(out_lo, out_hi)
         sub_lo, sub_hi = out_lo[idx], out_hi[idx]
         branches = np.asarray(self.postures[posture], dtype=np.int64)
-        kernels.mean_value_bounds(
-            lo[idx], hi[idx], np.ascontiguousarray(trig[:, :, idx]), branches, centre_trig, legs,
-            sub_lo, sub_hi,
-        )  # fmt: skip
+        forms = self._mean_values(lo, hi, idx, centre_trig)
+        if all(
+            _same_bits(a_lo[k, idx], forms[2][branches[k], k])
+            and _same_bits(a_hi[k, idx], forms[3][branches[k], k])
+            for k in range(3)
+        ):
+            # the angles are the legs' branches there (as the sheets take them):
+            # the form of every posture, computed at the first
+            kernels.intersect_finite(forms[0][posture], forms[1][posture], sub_lo, sub_hi)
+        else:
+            kernels.mean_value_bounds(
+                lo[idx], hi[idx], np.ascontiguousarray(trig[:, :, idx]), branches, centre_trig,
+                legs, sub_lo, sub_hi,
+            )  # fmt: skip
         out_lo[idx], out_hi[idx] = sub_lo, sub_hi
         return Interval(out_lo, out_hi)
+
+    def _mean_values(
+        self, lo: Array, hi: Array, idx: NDArray[np.intp], centre_trig: Array
+    ) -> tuple[Array, Array, Array, Array]:
+        """The mean-value form of every posture (not intersected) over the boxes
+        ``idx`` where every leg is regular (from :meth:`_centres`, whose ``idx``
+        and ``centre_trig`` they are), with the legs' branches' enclosures there
+        (:meth:`DeltaLeg.reach`): (P, m) lower and upper bounds, then the
+        branches' bounds (2, 3, m) they were computed with. By
+        :func:`._delta_kernels.mean_value_all`: what depends on one leg's branch
+        alone is computed once for the postures, not once for each. Kept for the
+        last boxes (the sheets ask for every posture over the same boxes)."""
+        last = self.__dict__.get("_last_forms")
+        if last is not None and last[0] is idx:
+            return last[1], last[2], last[3], last[4]
+        blo, bhi = lo[idx], hi[idx]
+        m = idx.size
+        b_lo, b_hi = np.empty((2, 3, m)), np.empty((2, 3, m))
+        for k, leg in enumerate(self.delta_legs):
+            reach = leg.reach(blo, bhi)
+            for b in range(2):
+                b_lo[b, k], b_hi[b, k] = reach.branches[b].lo, reach.branches[b].hi
+        postures = np.ascontiguousarray(self.postures, dtype=np.int64)
+        forms_lo, forms_hi = np.empty((postures.shape[0], m)), np.empty((postures.shape[0], m))
+        kernels.mean_value_all(
+            blo, bhi, b_lo, b_hi, postures, centre_trig, self._leg_constants, forms_lo, forms_hi
+        )
+        self.__dict__["_last_forms"] = (idx, forms_lo, forms_hi, b_lo, b_hi)
+        return forms_lo, forms_hi, b_lo, b_hi
 
     def _centres(self, lo: Array, hi: Array) -> tuple[NDArray[np.intp], Array]:
         """The boxes where every leg is regular, and the cosines and sines of both
