@@ -351,12 +351,17 @@ def _same_fold_flow(
 
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the references' infinities
+@pytest.mark.parametrize("kept", [True, False])
 @pytest.mark.parametrize("name", sorted(DESIGNS))
-def test_det_a_boxes_of_the_sheets_angles(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_det_a_boxes_of_the_sheets_angles(
+    name: str, kept: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """With the angles as the sheets take them (each leg's branch where it is
     regular, else the hull), every posture's mean-value form comes from one
     pass for all postures (``mean_value_all``; the one-posture kernel must not
-    run), and is the reference's, bit for bit."""
+    run), and is the reference's, bit for bit: with the branches the legs kept
+    of the boxes' reach (``kept``), and with those of the reach of the boxes
+    where every leg is regular alone."""
     from moveability.mechanisms import _delta_kernels
 
     def forbidden(*args: object) -> None:
@@ -366,6 +371,9 @@ def test_det_a_boxes_of_the_sheets_angles(name: str, monkeypatch: pytest.MonkeyP
     m = Delta(d.base_radius, d.platform_radius, d.arm, d.rod)  # no kept boxes
     lo, hi = _leg_boxes(m, seed=len(name) + 3)
     reaches = [leg.reach(lo, hi) for leg in m.delta_legs]
+    if not kept:
+        for leg in m.delta_legs:
+            leg.reach(lo[:3], hi[:3])
     monkeypatch.setattr(_delta_kernels, "mean_value_bounds", forbidden)
     narrowed = 0
     for posture in range(m.postures.shape[0]):

@@ -432,11 +432,27 @@ class DeltaLeg:
             np.arctan2(turned[y], turned[x], out=corners[i])
         out_lo, out_hi = np.empty((3, n)), np.empty((3, n))
         leg_kernels.reach_finish(fold, cs, sn, ref, corners, turned, acos, out_lo, out_hi)
+        # the branches kept for the last boxes, for Delta._mean_values
+        self.__dict__["_last_branches"] = (lo.copy(), hi.copy(), out_lo[:2], out_hi[:2])
         return LegReach(
             status=status,
             branches=[Interval(out_lo[0], out_hi[0]), Interval(out_lo[1], out_hi[1])],
             hull=Interval(out_lo[2], out_hi[2]),
             fold_connected=connected,
+        )
+
+    def branches_at(self, lo: Array, hi: Array, idx: NDArray[np.intp]) -> tuple[Array, Array]:
+        """The bounds of both branches' enclosures (:meth:`reach`) over the boxes
+        ``idx`` of ``[lo, hi]`` (n, 3), (2, m) each: those of the last boxes'
+        reach where ``[lo, hi]`` are those boxes (bit for bit), else the reach of
+        the boxes ``idx``."""
+        last = self.__dict__.get("_last_branches")
+        if last is not None and _same_bits(last[0], lo) and _same_bits(last[1], hi):
+            return last[2][:, idx], last[3][:, idx]
+        reach = self.reach(lo[idx], hi[idx])
+        return (
+            np.stack([reach.branches[0].lo, reach.branches[1].lo]),
+            np.stack([reach.branches[0].hi, reach.branches[1].hi]),
         )
 
     def _reach_intervals(self, lo: Array, hi: Array) -> LegReach:
@@ -1021,7 +1037,7 @@ class Delta(Mechanism):
         """The mean-value form of every posture (not intersected) over the boxes
         ``idx`` where every leg is regular (from :meth:`_centres`, whose ``idx``
         and ``centre_trig`` they are), with the legs' branches' enclosures there
-        (:meth:`DeltaLeg.reach`): (P, m) lower and upper bounds, then the
+        (:meth:`DeltaLeg.branches_at`): (P, m) lower and upper bounds, then the
         branches' bounds (2, 3, m) they were computed with. By
         :func:`._delta_kernels.mean_value_all`: what depends on one leg's branch
         alone is computed once for the postures, not once for each. Kept for the
@@ -1033,9 +1049,8 @@ class Delta(Mechanism):
         m = idx.size
         b_lo, b_hi = np.empty((2, 3, m)), np.empty((2, 3, m))
         for k, leg in enumerate(self.delta_legs):
-            reach = leg.reach(blo, bhi)
-            for b in range(2):
-                b_lo[b, k], b_hi[b, k] = reach.branches[b].lo, reach.branches[b].hi
+            # the sheets have just taken the reach of these boxes
+            b_lo[:, k], b_hi[:, k] = leg.branches_at(lo, hi, idx)
         postures = np.ascontiguousarray(self.postures, dtype=np.int64)
         forms_lo, forms_hi = np.empty((postures.shape[0], m)), np.empty((postures.shape[0], m))
         kernels.mean_value_all(
