@@ -360,18 +360,22 @@ def test_det_a_boxes_of_the_sheets_angles(
     regular, else the hull), every posture's mean-value form comes from one
     pass for all postures (``mean_value_all``; the one-posture kernel must not
     run), and is the reference's, bit for bit: with the branches the legs kept
-    of the boxes' reach (``kept``), and with those of the reach of the boxes
-    where every leg is regular alone."""
+    of the boxes' reach (``kept``; then the enclosures of the rows too, from
+    ``det_a_all``), and with those of the reach of the boxes where every leg is
+    regular alone."""
     from moveability.mechanisms import _delta_kernels
 
     def forbidden(*args: object) -> None:
-        raise AssertionError("mean_value_bounds ran")
+        raise AssertionError("a one-posture kernel ran")
 
     d = DESIGNS[name]
     m = Delta(d.base_radius, d.platform_radius, d.arm, d.rod)  # no kept boxes
     lo, hi = _leg_boxes(m, seed=len(name) + 3)
     reaches = [leg.reach(lo, hi) for leg in m.delta_legs]
-    if not kept:
+    if kept:
+        # every posture's enclosures from det_a_all too
+        monkeypatch.setattr(_delta_kernels, "det_a_prepare", forbidden)
+    else:
         for leg in m.delta_legs:
             leg.reach(lo[:3], hi[:3])
     monkeypatch.setattr(_delta_kernels, "mean_value_bounds", forbidden)
@@ -388,6 +392,6 @@ def test_det_a_boxes_of_the_sheets_angles(
             )
         got = m.det_a_boxes(lo, hi, angles, posture=posture)
         _same(got, m._det_a_boxes_intervals(lo, hi, angles, posture=posture))
-        plain = m.det_a_boxes(lo, hi, angles)
+        plain = m._det_a_boxes_intervals(lo, hi, angles)
         narrowed += int(((got.lo != plain.lo) | (got.hi != plain.hi)).sum())
     assert narrowed > 100

@@ -205,6 +205,9 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         (R2, R2, array(F8, 3), array(F8, 3), array(I8, 2), array(F8, 4), R2, W2, W2)
     ],
     "moveability.mechanisms._delta_kernels.intersect_finite": [(R1, R1, W1, W1)],
+    "moveability.mechanisms._delta_kernels.det_a_all": [
+        (R2, R2, array(F8, 3), array(F8, 3), array(I8, 2), R2, W2, W2)
+    ],
     "moveability.mechanisms._delta_leg_kernels.reach_prepare": [
         (
             R2, R2, R1, array("uint8"), array("uint8", out=True), array("uint8", out=True),

@@ -73,6 +73,7 @@ __all__ = [
     "centre_args",
     "centre_trig",
     "centre_turn",
+    "det_a_all",
     "det_a_prepare",
     "intersect_finite",
     "mean_value_all",
@@ -724,3 +725,79 @@ def intersect_finite(
         if np.isfinite(lo_j) and np.isfinite(hi_j):
             out_lo[j] = nan_max(out_lo[j], lo_j)
             out_hi[j] = nan_min(out_hi[j], hi_j)
+
+
+# the slots of det_a_all beyond those of det_a_prepare: for each branch b, from
+# _PLAIN + _PER_PLAIN b, the cosines and sines of the legs' angles (leg k's at + 2 k,
+# + 2 k + 1), the rows of A (leg k's at + 6 + 3 k), la cos and la sin (leg k's at +
+# 15 + 2 k, + 1) and the sphere centres (leg k's at + 21 + 3 k)
+_PLAIN, _PER_PLAIN = _SLOTS, 30
+_P_TRIG, _P_ROWS, _P_ARM_TRIG, _P_CENTRES = 0, 6, 15, 21
+_PLAIN_SLOTS = _PLAIN + 2 * _PER_PLAIN
+
+
+@kernel
+def det_a_all(
+    lo: Array,
+    hi: Array,
+    a_lo: Array,
+    a_hi: Array,
+    postures: NDArray[np.int64],
+    legs: Array,
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """:func:`det_a_prepare`'s enclosure (``Delta._det_a_plain``) of the (n, 3)
+    boxes for every posture at once, into ``out`` (P, n): the legs' angle
+    enclosures on each branch are ``[a_lo, a_hi]`` (2, 3, n), ``postures`` (P,
+    3) the branches of each posture.
+
+    Each posture's enclosure comes from the operations of :func:`_rows` and
+    :func:`_plain_rest` in the same order, so its bounds are the same floats;
+    what depends on one leg's angle alone (their cosines and sines, the leg's
+    row of A, its sphere centre) is computed once per branch, not once per
+    posture."""
+    n = lo.shape[0]
+    trig = np.empty((2, 4, 3, n))
+    for b in range(2):
+        trig[b] = _trig_of(a_lo[b], a_hi[b])
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_PLAIN_SLOTS, w)), np.empty((_PLAIN_SLOTS, w))
+    x, h, t = np.int64(_X), np.int64(_TEMP), np.int64(_TEMP + 2)
+    nat, alt, cm = np.int64(_NAT), np.int64(_ALT), np.int64(_CENTRES)
+    matrix = np.empty(9, dtype=np.int64)
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        for b in range(2):
+            base = np.int64(_PLAIN + _PER_PLAIN * b)
+            arm_trig = base + _P_ARM_TRIG
+            _load(s_lo, s_hi, lo, hi, trig[b], s, size, x, base + _P_TRIG)
+            _rows(s_lo, s_hi, x, base + _P_TRIG, legs, base + _P_ROWS, arm_trig, size)
+            # the centres, as _plain_rest has them
+            for k in range(3):
+                leg = legs[k]
+                c = base + _P_CENTRES + 3 * k
+                slot_sub_c(s_lo, s_hi, arm_trig + 2 * k, leg[OFF_LO], leg[OFF_HI], h, size)
+                slot_mul_c(s_lo, s_hi, h, leg[UX_LO], leg[UX_HI], c, size)
+                slot_mul_c(s_lo, s_hi, h, leg[UY_LO], leg[UY_HI], c + 1, size)
+                slot_negate(s_lo, s_hi, arm_trig + 2 * k + 1, c + 2, size)
+        for p in range(postures.shape[0]):
+            for k in range(3):
+                base = _PLAIN + _PER_PLAIN * postures[p, k]
+                for j in range(3):
+                    matrix[3 * k + j] = base + _P_ROWS + 3 * k + j
+            slot_det3(s_lo, s_hi, matrix, nat, t, size)
+            c1 = _PLAIN + _PER_PLAIN * postures[p, 0] + _P_CENTRES
+            c2 = _PLAIN + _PER_PLAIN * postures[p, 1] + _P_CENTRES + 3
+            c3 = _PLAIN + _PER_PLAIN * postures[p, 2] + _P_CENTRES + 6
+            # P - c_1, c_1 - c_2, c_1 - c_3
+            for e in range(3):
+                slot_sub(s_lo, s_hi, c1 + e, c2 + e, cm + 3 + e, size)
+                slot_sub(s_lo, s_hi, c1 + e, c3 + e, cm + 6 + e, size)
+                slot_sub(s_lo, s_hi, x + e, c1 + e, cm + e, size)
+            for i in range(9):
+                matrix[i] = cm + i
+            slot_det3(s_lo, s_hi, matrix, alt, t, size)
+            for j in range(size):
+                out_lo[p, s + j] = nan_max(s_lo[nat, j], s_lo[alt, j])
+                out_hi[p, s + j] = nan_min(s_hi[nat, j], s_hi[alt, j])

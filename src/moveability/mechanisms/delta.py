@@ -432,13 +432,27 @@ class DeltaLeg:
             np.arctan2(turned[y], turned[x], out=corners[i])
         out_lo, out_hi = np.empty((3, n)), np.empty((3, n))
         leg_kernels.reach_finish(fold, cs, sn, ref, corners, turned, acos, out_lo, out_hi)
-        # the branches kept for the last boxes, for Delta._mean_values
-        self.__dict__["_last_branches"] = (lo.copy(), hi.copy(), out_lo[:2], out_hi[:2])
+        # kept for the last boxes, for Delta._mean_values and _plain_forms
+        self.__dict__["_last_branches"] = (lo.copy(), hi.copy(), out_lo, out_hi, status.copy())
         return LegReach(
             status=status,
             branches=[Interval(out_lo[0], out_hi[0]), Interval(out_lo[1], out_hi[1])],
             hull=Interval(out_lo[2], out_hi[2]),
             fold_connected=connected,
+        )
+
+    def sheet_angles(self, lo: Array, hi: Array) -> tuple[Array, Array] | None:
+        """The angle enclosures of both branches as the sheets take them (the
+        branch's where the leg is regular, else the hull of both), (2, n) lower
+        and upper bounds, from the reach kept of the boxes ``[lo, hi]`` (n, 3)
+        (bit for bit); None where the last reach was of other boxes."""
+        last = self.__dict__.get("_last_branches")
+        if last is None or not (_same_bits(last[0], lo) and _same_bits(last[1], hi)):
+            return None
+        regular = last[4] == REGULAR
+        return (
+            np.stack([np.where(regular, last[2][b], last[2][2]) for b in range(2)]),
+            np.stack([np.where(regular, last[3][b], last[3][2]) for b in range(2)]),
         )
 
     def branches_at(self, lo: Array, hi: Array, idx: NDArray[np.intp]) -> tuple[Array, Array]:
@@ -448,7 +462,7 @@ class DeltaLeg:
         the boxes ``idx``."""
         last = self.__dict__.get("_last_branches")
         if last is not None and _same_bits(last[0], lo) and _same_bits(last[1], hi):
-            return last[2][:, idx], last[3][:, idx]
+            return last[2][:2, idx], last[3][:2, idx]
         reach = self.reach(lo[idx], hi[idx])
         return (
             np.stack([reach.branches[0].lo, reach.branches[1].lo]),
@@ -1004,16 +1018,27 @@ class Delta(Mechanism):
         a_lo = np.stack([parts[0][0], parts[1][0], parts[2][0]])
         a_hi = np.stack([parts[0][1], parts[1][1], parts[2][1]])
         legs = self._leg_constants
-        out_lo, out_hi = np.empty(n), np.empty(n)
-        trig = np.empty((4, 3, n))
-        kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, out_lo, out_hi, trig)
+        trig = None
+        plain = None if posture is None else self._plain_forms(lo, hi)
+        branches = np.asarray(self.postures[posture or 0], dtype=np.int64)
+        if plain is not None and all(
+            _same_bits(a_lo[k], plain[2][branches[k], k])
+            and _same_bits(a_hi[k], plain[3][branches[k], k])
+            for k in range(3)
+        ):
+            # the angles are the legs' as the sheets take them: every posture's
+            # enclosure, computed at the first
+            out_lo, out_hi = plain[0][posture].copy(), plain[1][posture].copy()
+        else:
+            out_lo, out_hi = np.empty(n), np.empty(n)
+            trig = np.empty((4, 3, n))
+            kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, out_lo, out_hi, trig)
         if posture is None:
             return Interval(out_lo, out_hi)
         idx, centre_trig = self._centres(lo, hi)
         if not idx.size:
             return Interval(out_lo, out_hi)
         sub_lo, sub_hi = out_lo[idx], out_hi[idx]
-        branches = np.asarray(self.postures[posture], dtype=np.int64)
         forms = self._mean_values(lo, hi, idx, centre_trig)
         if all(
             _same_bits(a_lo[k, idx], forms[2][branches[k], k])
@@ -1024,12 +1049,43 @@ class Delta(Mechanism):
             # the form of every posture, computed at the first
             kernels.intersect_finite(forms[0][posture], forms[1][posture], sub_lo, sub_hi)
         else:
+            if trig is None:
+                # the cosines and sines of the angles (the enclosures unused)
+                trig = np.empty((4, 3, n))
+                kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, np.empty(n), np.empty(n), trig)
             kernels.mean_value_bounds(
                 lo[idx], hi[idx], np.ascontiguousarray(trig[:, :, idx]), branches, centre_trig,
                 legs, sub_lo, sub_hi,
             )  # fmt: skip
         out_lo[idx], out_hi[idx] = sub_lo, sub_hi
         return Interval(out_lo, out_hi)
+
+    def _plain_forms(self, lo: Array, hi: Array) -> tuple[Array, Array, Array, Array] | None:
+        """The enclosure of :meth:`_det_a_plain` of every posture over the boxes
+        (n, 3), with the legs' angles as the sheets take them (each leg's
+        branch where it is regular, else the hull of both) from the reach the
+        legs have kept of these boxes (:meth:`DeltaLeg.sheet_angles`): (P, n)
+        lower and upper bounds, then the angles' bounds (2, 3, n) they were
+        computed with; None where a leg kept no reach of these boxes. By
+        :func:`._delta_kernels.det_a_all`: what depends on one leg's angle alone
+        is computed once for the postures, not once for each. Kept for the last
+        boxes."""
+        kept = [leg.__dict__.get("_last_branches") for leg in self.delta_legs]
+        last = self.__dict__.get("_last_plain")
+        if last is not None and all(a is b for a, b in zip(last[0], kept, strict=True)):
+            return last[1], last[2], last[3], last[4]
+        a_lo, a_hi = np.empty((2, 3, lo.shape[0])), np.empty((2, 3, lo.shape[0]))
+        for k, leg in enumerate(self.delta_legs):
+            angles = leg.sheet_angles(lo, hi)
+            if angles is None:
+                return None
+            a_lo[:, k], a_hi[:, k] = angles
+        postures = np.ascontiguousarray(self.postures, dtype=np.int64)
+        n_post = postures.shape[0]
+        forms_lo, forms_hi = np.empty((n_post, lo.shape[0])), np.empty((n_post, lo.shape[0]))
+        kernels.det_a_all(lo, hi, a_lo, a_hi, postures, self._leg_constants, forms_lo, forms_hi)
+        self.__dict__["_last_plain"] = (tuple(kept), forms_lo, forms_hi, a_lo, a_hi)
+        return forms_lo, forms_hi, a_lo, a_hi
 
     def _mean_values(
         self, lo: Array, hi: Array, idx: NDArray[np.intp], centre_trig: Array
