@@ -177,3 +177,221 @@ def test_det_a_boxes_of_few_boxes_and_other_shapes() -> None:
         m.det_a_boxes(np.asfortranarray(lo), np.asfortranarray(hi), one, posture=2),
         m._det_a_boxes_intervals(lo, hi, one, posture=2),
     )
+
+
+# ------------------------------------------------------------------ the legs
+# mechanisms/_delta_leg_kernels.py against DeltaLeg's Interval code
+# (``_reach_intervals``, ``_joint_gradient_intervals``, ``_fold_flow_intervals``)
+
+
+def _leg_boxes(m: Delta, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The boxes of :func:`_boxes`, and more about the legs' folds (wider: they
+    hold both sides), with NaN and infinite coordinates."""
+    lo, hi = _boxes(m, 700, seed)
+    rng = np.random.default_rng(seed + 100)
+    # boxes about the fold surfaces, of widths that certify folds and connect them
+    flo, fhi = _boxes(m, 400, seed + 1)
+    mid = 0.5 * (flo + fhi)
+    span = m.bounds[1] - m.bounds[0]
+    half = span * 10.0 ** rng.uniform(-5, -1.5, (400, 1)) / 2
+    lo, hi = np.concatenate([lo, mid - half]), np.concatenate([hi, mid + half])
+    odd = rng.choice(lo.shape[0], 20, replace=False)
+    axis = rng.integers(0, 3, 20)
+    lo[odd, axis] = rng.choice([np.nan, -np.inf, 0.0], 20)
+    hi[odd, axis] = rng.choice([np.nan, np.inf, 1.0], 20)
+    return lo, hi
+
+
+def _same_reach(got: object, want: object) -> None:
+    assert np.array_equal(got.status, want.status)  # type: ignore[attr-defined]
+    assert np.array_equal(got.fold_connected, want.fold_connected)  # type: ignore[attr-defined]
+    for a, b in zip(got.branches, want.branches, strict=True):  # type: ignore[attr-defined]
+        _same(a, b)
+    _same(got.hull, want.hull)  # type: ignore[attr-defined]
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the references' infinities
+@pytest.mark.parametrize("name", sorted(DESIGNS))
+def test_leg_reach_bit_for_bit(name: str) -> None:
+    from moveability.mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN
+
+    m = DESIGNS[name]
+    lo, hi = _leg_boxes(m, seed=len(name))
+    seen = np.zeros(5, dtype=int)
+    for leg in m.delta_legs:
+        got, want = leg.reach(lo, hi), leg._reach_intervals(lo, hi)
+        _same_reach(got, want)
+        for k, code in enumerate((REGULAR, FOLD_OUTER, FOLD_INNER, REACH_OUT, REACH_UNKNOWN)):
+            seen[k] += int((want.status == code).sum())
+        folds = (want.status == FOLD_OUTER) | (want.status == FOLD_INNER)
+        connected = int((want.fold_connected & folds).sum())
+        assert connected > 10
+    # every path of the kernels ran: regular, folds of both kinds (a rod no longer
+    # than the arm has no inner fold, g > -1), out of reach, unknown
+    assert seen[0] > 100 and seen[1] > 10 and seen[3] > 10 and seen[4] > 10
+    assert seen[2] > 10 or m.rod <= m.arm
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the references' infinities
+def test_leg_reach_of_few_boxes_and_other_shapes() -> None:
+    m = DESIGNS["default"]
+    lo, hi = _leg_boxes(m, seed=5)
+    leg = m.delta_legs[1]
+    for k in (0, 1, 2, 17):
+        _same_reach(leg.reach(lo[:k], hi[:k]), leg._reach_intervals(lo[:k], hi[:k]))
+    _same_reach(
+        leg.reach(np.asfortranarray(lo), np.asfortranarray(hi)), leg._reach_intervals(lo, hi)
+    )
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the references' infinities
+@pytest.mark.parametrize("name", sorted(DESIGNS))
+def test_joint_gradient_bit_for_bit(name: str) -> None:
+    m = DESIGNS[name]
+    lo, hi = _leg_boxes(m, seed=len(name) + 7)
+    mid = 0.5 * lo + 0.5 * hi
+    finite = 0
+    for posture in (0, 3, 6):
+        angles = _angles(m, lo, hi, posture, seed=posture)
+        for i, leg in enumerate(m.delta_legs):
+            b = int(m.postures[posture][i])
+            got = leg.joint_gradient(lo, hi, b, angles[i])
+            want = leg._joint_gradient_intervals(lo, hi, b, angles[i])
+            for g, w in zip(got, want, strict=True):
+                _same(g, w)
+                finite += int((np.isfinite(w.lo) & np.isfinite(w.hi)).sum())
+            # at the centres, with the centres of the enclosures (as flows take them)
+            centre = Interval(angles[i].mid)
+            got = leg.joint_gradient(mid, mid, b, centre)
+            want = leg._joint_gradient_intervals(mid, mid, b, centre)
+            for g, w in zip(got, want, strict=True):
+                _same(g, w)
+    assert finite > 1000
+    # one enclosure for every box (a broadcast view)
+    leg = m.delta_legs[2]
+    one = Interval(np.broadcast_to(0.3, (lo.shape[0],)), np.broadcast_to(0.4, (lo.shape[0],)))
+    for g, w in zip(
+        leg.joint_gradient(lo, hi, 0, one),
+        leg._joint_gradient_intervals(lo, hi, 0, one),
+        strict=True,
+    ):
+        _same(g, w)
+
+
+def _velocities(n: int, seed: int) -> list[list[Interval]]:
+    """Velocities of every kind: the axes' unit vectors (one interval for every
+    box), random enclosures, points, wide, infinite and NaN."""
+    rng = np.random.default_rng(seed)
+    out = [[Interval(np.array(float(a == j))) for j in range(3)] for a in range(3)]
+    out.append([Interval(np.array(-1.0)), Interval(np.array(0.5)), Interval(np.array(0.25))])
+    for _ in range(3):
+        v = []
+        for _axis in range(3):
+            c = rng.normal(size=n)
+            w = 10.0 ** rng.uniform(-12, 0.5, n)
+            w[rng.random(n) < 0.2] = 0.0
+            v_lo, v_hi = c - w / 2, c + w / 2
+            odd = rng.random(n) < 0.03
+            v_lo[odd] = rng.choice([-np.inf, np.nan, 0.0, -0.0], int(odd.sum()))
+            v_hi[odd] = rng.choice([np.inf, np.nan, 0.0, 1.0], int(odd.sum()))
+            v.append(Interval(v_lo, v_hi))
+        out.append(v)
+    return out
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the references' infinities
+@pytest.mark.parametrize("name", sorted(DESIGNS))
+def test_fold_flow_bit_for_bit(name: str) -> None:
+    m = DESIGNS[name]
+    lo, hi = _leg_boxes(m, seed=len(name) + 11)
+    n = lo.shape[0]
+    kept = 0
+    for leg in m.delta_legs:
+        status = leg._reach_intervals(lo, hi).status
+        for branch in (0, 1):
+            cache: dict[str, object] = {}
+            reference: dict[str, object] = {}
+            for velocity in _velocities(n, seed=branch):
+                keeps, rate = leg.fold_flow(lo, hi, status, branch, velocity, cache=cache)
+                want_keeps, want_rate = leg._fold_flow_intervals(
+                    lo, hi, status, branch, velocity, cache=reference
+                )
+                _same_fold_flow(keeps, rate, want_keeps, want_rate, status)
+                kept += int(keeps.sum())
+            # without a cache, and of one box of each kind
+            velocity = [Interval(np.array(1.0)), Interval(np.array(0.0)), Interval(-0.5, 0.25)]
+            for k in range(5):
+                at = np.flatnonzero(status == status[k * 17])[:1]
+                keeps, rate = leg.fold_flow(lo[at], hi[at], status[at], branch, velocity)
+                want_keeps, want_rate = leg._fold_flow_intervals(
+                    lo[at], hi[at], status[at], branch, velocity
+                )
+                _same_fold_flow(keeps, rate, want_keeps, want_rate, status[at])
+    assert kept > 0
+
+
+def _same_fold_flow(
+    keeps: np.ndarray,
+    rate: Interval,
+    want_keeps: np.ndarray,
+    want_rate: Interval,
+    status: np.ndarray,
+) -> None:
+    """The compiled fold flow is the reference's where the leg may fold; elsewhere
+    it keeps nothing (as the reference) and its rate is the whole line."""
+    from moveability.mechanisms.base import FOLD_INNER, FOLD_OUTER
+
+    folds = (status == FOLD_OUTER) | (status == FOLD_INNER)
+    assert np.array_equal(keeps, want_keeps)
+    assert not keeps[~folds].any()
+    _same(
+        Interval(rate.lo[folds], rate.hi[folds]), Interval(want_rate.lo[folds], want_rate.hi[folds])
+    )
+    assert (rate.lo[~folds] == -np.inf).all() and (rate.hi[~folds] == np.inf).all()
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the references' infinities
+@pytest.mark.parametrize("kept", [True, False])
+@pytest.mark.parametrize("name", sorted(DESIGNS))
+def test_det_a_boxes_of_the_sheets_angles(
+    name: str, kept: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With the angles as the sheets take them (each leg's branch where it is
+    regular, else the hull), every posture's mean-value form comes from one
+    pass for all postures (``mean_value_all``; the one-posture kernel must not
+    run), and is the reference's, bit for bit: with the branches the legs kept
+    of the boxes' reach (``kept``; then the enclosures of the rows too, from
+    ``det_a_all``), and with those of the reach of the boxes where every leg is
+    regular alone."""
+    from moveability.mechanisms import _delta_kernels
+
+    def forbidden(*args: object) -> None:
+        raise AssertionError("a one-posture kernel ran")
+
+    d = DESIGNS[name]
+    m = Delta(d.base_radius, d.platform_radius, d.arm, d.rod)  # no kept boxes
+    lo, hi = _leg_boxes(m, seed=len(name) + 3)
+    reaches = [leg.reach(lo, hi) for leg in m.delta_legs]
+    if kept:
+        # every posture's enclosures from det_a_all too
+        monkeypatch.setattr(_delta_kernels, "det_a_prepare", forbidden)
+    else:
+        for leg in m.delta_legs:
+            leg.reach(lo[:3], hi[:3])
+    monkeypatch.setattr(_delta_kernels, "mean_value_bounds", forbidden)
+    narrowed = 0
+    for posture in range(m.postures.shape[0]):
+        angles = []
+        for i, r in enumerate(reaches):
+            branch = r.branches[int(m.postures[posture][i])]
+            regular = r.status == REGULAR
+            angles.append(
+                Interval(
+                    np.where(regular, branch.lo, r.hull.lo), np.where(regular, branch.hi, r.hull.hi)
+                )
+            )
+        got = m.det_a_boxes(lo, hi, angles, posture=posture)
+        _same(got, m._det_a_boxes_intervals(lo, hi, angles, posture=posture))
+        plain = m._det_a_boxes_intervals(lo, hi, angles)
+        narrowed += int(((got.lo != plain.lo) | (got.hi != plain.hi)).sum())
+    assert narrowed > 100

@@ -225,6 +225,34 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
             array(F8, 4), array(B1, 2),
         )
     ],
+    "moveability.mechanisms._delta_kernels.mean_value_all": [
+        (R2, R2, array(F8, 3), array(F8, 3), array(I8, 2), array(F8, 4), R2, W2, W2)
+    ],
+    "moveability.mechanisms._delta_kernels.intersect_finite": [(R1, R1, W1, W1)],
+    "moveability.mechanisms._delta_kernels.det_a_all": [
+        (R2, R2, array(F8, 3), array(F8, 3), array(I8, 2), R2, W2, W2)
+    ],
+    "moveability.mechanisms._delta_leg_kernels.reach_prepare": [
+        (
+            R2, R2, R1, array("uint8"), array("uint8", out=True), array("uint8", out=True),
+            array(B1, out=True), W2,
+        )
+    ],
+    "moveability.mechanisms._delta_leg_kernels.reach_turn": [(R2, R1, R1, W2)],
+    "moveability.mechanisms._delta_leg_kernels.reach_finish": [
+        (array("uint8"), R1, R1, R1, R2, R2, R2, W2, W2)
+    ],
+    "moveability.mechanisms._delta_leg_kernels.joint_gradient_bounds": [
+        (R2, R2, R1, R1, R1, W2, W2)
+    ],
+    "moveability.mechanisms._delta_leg_kernels.fold_terms_prepare": [(R2, R2, R1, W2, W2, W2)],
+    "moveability.mechanisms._delta_leg_kernels.fold_terms_finish": [(R2, W2, W2)],
+    "moveability.mechanisms._delta_leg_kernels.fold_rate_bounds": [
+        (
+            R2, R2, R2, R2, array("uint8"), array("uint8"), F8, R1, array(B1, out=True), W1,
+            W1,
+        )
+    ],
 }
 
 

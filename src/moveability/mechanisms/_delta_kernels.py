@@ -73,7 +73,10 @@ __all__ = [
     "centre_args",
     "centre_trig",
     "centre_turn",
+    "det_a_all",
     "det_a_prepare",
+    "intersect_finite",
+    "mean_value_all",
     "mean_value_bounds",
     "regular_boxes",
 ]
@@ -560,3 +563,241 @@ def mean_value_bounds(
             if np.isfinite(t_lo) and np.isfinite(t_hi):
                 out_lo[s + j] = nan_max(out_lo[s + j], t_lo)
                 out_hi[s + j] = nan_min(out_hi[s + j], t_hi)
+
+
+# the slots of mean_value_all beyond those of mean_value_bounds: for each branch b,
+# from _BRANCH + _PER_BRANCH b, the cosines and sines of the legs' angles (leg k's at
+# + 2 k, + 2 k + 1), the rows of A over the box (leg k's at + 6 + 3 k), la cos and
+# la sin (leg k's at + 15 + 2 k, + 1), and the rows moved along each axis (leg k's
+# along axis a at + 21 + 9 k + 3 a); then the boxes' widths about their centres
+_BRANCH, _PER_BRANCH = _SLOTS, 48
+_B_TRIG, _B_ROWS, _B_ARM_TRIG, _B_MOVED = 0, 6, 15, 21
+_WIDTHS = _BRANCH + 2 * _PER_BRANCH  # 3 slots
+_ALL_SLOTS = _WIDTHS + 3
+
+
+@kernel
+def _moved_rows(
+    lo: Array,
+    hi: Array,
+    x: Slot,
+    base: Slot,
+    legs: Array,
+    one_lo: float,
+    one_hi: float,
+    zero_lo: float,
+    zero_hi: float,
+    w: int,
+) -> None:  # pragma: no cover - compiled
+    """One branch's part of :func:`mean_value_bounds` (the legs on that branch, its
+    slots from ``base``, the cosines and sines of the angles loaded): the rows of A
+    over the box, the joints' gradients and each leg's row moved along each axis,
+    by the same operations in the same order."""
+    trig, rows, arm_trig = base + _B_TRIG, base + _B_ROWS, base + _B_ARM_TRIG
+    grad, den, sp, t = np.int64(_GRAD), np.int64(_DEN), np.int64(_S), np.int64(_TEMP)
+    _rows(lo, hi, x, trig, legs, rows, arm_trig, w)
+    for k in range(3):
+        leg = legs[k]
+        slot_mul_c(lo, hi, x, leg[UX_LO], leg[UX_HI], t, w)
+        slot_mul_c(lo, hi, x + 1, leg[UY_LO], leg[UY_HI], t + 1, w)
+        slot_add(lo, hi, t, t + 1, sp, w)
+        slot_add_c(lo, hi, sp, leg[OFF_LO], leg[OFF_HI], sp, w)
+        slot_mul(lo, hi, sp, trig + 2 * k + 1, t, w)
+        slot_mul(lo, hi, x + 2, trig + 2 * k, t + 1, w)
+        slot_add(lo, hi, t, t + 1, den, w)
+        slot_mul_c(lo, hi, den, leg[ARM], leg[ARM], den, w)
+        for e in range(3):
+            _div_into(lo, hi, rows + 3 * k + e, den, grad + 3 * k + e, w)
+            slot_negate(lo, hi, grad + 3 * k + e, grad + 3 * k + e, w)
+    for axis in range(3):
+        for i in range(3):
+            leg = legs[i]
+            moved = base + _B_MOVED + 9 * i + 3 * axis
+            for j in range(3):
+                if j < 2:
+                    slot_mul_c(
+                        lo, hi, arm_trig + 2 * i + 1,
+                        leg[UX_LO] if j == 0 else leg[UY_LO],
+                        leg[UX_HI] if j == 0 else leg[UY_HI],
+                        moved + j, w,
+                    )  # fmt: skip
+                    slot_mul(lo, hi, moved + j, grad + 3 * i + axis, moved + j, w)
+                else:
+                    slot_mul(lo, hi, arm_trig + 2 * i, grad + 3 * i + axis, moved + j, w)
+                for ax in range(3):
+                    unit = j == ax and ax == axis
+                    slot_add_c(
+                        lo, hi, moved + j,
+                        one_lo if unit else zero_lo, one_hi if unit else zero_hi,
+                        moved + j, w,
+                    )  # fmt: skip
+
+
+@kernel
+def mean_value_all(
+    lo: Array,
+    hi: Array,
+    a_lo: Array,
+    a_hi: Array,
+    postures: NDArray[np.int64],
+    centre_trig: Array,
+    legs: Array,
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """:func:`mean_value_bounds`' form ``D(m) + sum_j dD/dx_j (x_j - m_j)`` over the
+    (n, 3) boxes where every leg is regular, for every posture at once, into
+    ``out`` (P, n) (not intersected). The legs' angle enclosures on each branch
+    are ``[a_lo, a_hi]`` (2, 3, n); ``postures`` (P, 3) the branches of each
+    posture; ``centre_trig`` as :func:`mean_value_bounds` takes it.
+
+    Each posture's form is computed by the operations of
+    :func:`mean_value_bounds` in the same order, so its bounds are the same
+    floats; what depends on one leg's branch alone (the rows of A over the box,
+    the joints' gradients, the rows moved along each axis) is computed once per
+    branch, not once per posture."""
+    n = lo.shape[0]
+    one_lo, one_hi = interval_mul(1.0, 1.0, 1.0, 1.0)
+    zero_lo, zero_hi = interval_mul(0.0, 0.0, 1.0, 1.0)
+    box_trig = np.empty((2, 4, 3, n))
+    for b in range(2):
+        box_trig[b] = _trig_of(a_lo[b], a_hi[b])
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_ALL_SLOTS, w)), np.empty((_ALL_SLOTS, w))
+    x, mx, mtrig = np.int64(_X), np.int64(_M), np.int64(_MTRIG)
+    mrows, marm_trig = np.int64(_MROWS), np.int64(_MARM_TRIG)
+    tot, rate, term = np.int64(_TOT), np.int64(_RATE), np.int64(_TERM)
+    t = np.int64(_TEMP)
+    widths = np.int64(_WIDTHS)
+    matrix = np.empty(9, dtype=np.int64)
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        for b in range(2):
+            base = np.int64(_BRANCH + _PER_BRANCH * b)
+            _load(s_lo, s_hi, lo, hi, box_trig[b], s, size, x, base + _B_TRIG)
+            _moved_rows(s_lo, s_hi, x, base, legs, one_lo, one_hi, zero_lo, zero_hi, size)
+        for j in range(size):
+            for axis in range(3):
+                m = 0.5 * lo[s + j, axis] + 0.5 * hi[s + j, axis]
+                s_lo[mx + axis, j] = m
+                s_hi[mx + axis, j] = m
+        for axis in range(3):
+            slot_sub(s_lo, s_hi, x + axis, mx + axis, widths + axis, size)
+        for p in range(postures.shape[0]):
+            for j in range(size):
+                for k in range(3):
+                    b = postures[p, k]
+                    s_lo[mtrig + 2 * k, j] = centre_trig[b, 0, k, s + j]
+                    s_hi[mtrig + 2 * k, j] = centre_trig[b, 1, k, s + j]
+                    s_lo[mtrig + 2 * k + 1, j] = centre_trig[b, 2, k, s + j]
+                    s_hi[mtrig + 2 * k + 1, j] = centre_trig[b, 3, k, s + j]
+            # D(m)
+            _rows(s_lo, s_hi, mx, mtrig, legs, mrows, marm_trig, size)
+            _plain_rest(s_lo, s_hi, mx, mrows, marm_trig, legs, tot, size)
+            for axis in range(3):
+                for i in range(3):
+                    for k in range(3):
+                        base = _BRANCH + _PER_BRANCH * postures[p, k]
+                        for j in range(3):
+                            matrix[3 * k + j] = base + _B_ROWS + 3 * k + j
+                    base = _BRANCH + _PER_BRANCH * postures[p, i]
+                    for j in range(3):
+                        matrix[3 * i + j] = base + _B_MOVED + 9 * i + 3 * axis + j
+                    if i == 0:
+                        slot_det3(s_lo, s_hi, matrix, rate, t, size)
+                    else:
+                        slot_det3(s_lo, s_hi, matrix, term, t, size)
+                        slot_add(s_lo, s_hi, rate, term, rate, size)
+                slot_mul(s_lo, s_hi, rate, widths + axis, term, size)
+                slot_add(s_lo, s_hi, tot, term, tot, size)
+            out_lo[p, s : s + size] = s_lo[tot, :size]
+            out_hi[p, s : s + size] = s_hi[tot, :size]
+
+
+@kernel
+def intersect_finite(
+    t_lo: Array, t_hi: Array, out_lo: Array, out_hi: Array
+) -> None:  # pragma: no cover - compiled
+    """``out`` (n,) intersected with ``[t_lo, t_hi]`` where both bounds are finite,
+    as :func:`mean_value_bounds` ends."""
+    for j in range(out_lo.shape[0]):
+        lo_j, hi_j = t_lo[j], t_hi[j]
+        if np.isfinite(lo_j) and np.isfinite(hi_j):
+            out_lo[j] = nan_max(out_lo[j], lo_j)
+            out_hi[j] = nan_min(out_hi[j], hi_j)
+
+
+# the slots of det_a_all beyond those of det_a_prepare: for each branch b, from
+# _PLAIN + _PER_PLAIN b, the cosines and sines of the legs' angles (leg k's at + 2 k,
+# + 2 k + 1), the rows of A (leg k's at + 6 + 3 k), la cos and la sin (leg k's at +
+# 15 + 2 k, + 1) and the sphere centres (leg k's at + 21 + 3 k)
+_PLAIN, _PER_PLAIN = _SLOTS, 30
+_P_TRIG, _P_ROWS, _P_ARM_TRIG, _P_CENTRES = 0, 6, 15, 21
+_PLAIN_SLOTS = _PLAIN + 2 * _PER_PLAIN
+
+
+@kernel
+def det_a_all(
+    lo: Array,
+    hi: Array,
+    a_lo: Array,
+    a_hi: Array,
+    postures: NDArray[np.int64],
+    legs: Array,
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """:func:`det_a_prepare`'s enclosure (``Delta._det_a_plain``) of the (n, 3)
+    boxes for every posture at once, into ``out`` (P, n): the legs' angle
+    enclosures on each branch are ``[a_lo, a_hi]`` (2, 3, n), ``postures`` (P,
+    3) the branches of each posture.
+
+    Each posture's enclosure comes from the operations of :func:`_rows` and
+    :func:`_plain_rest` in the same order, so its bounds are the same floats;
+    what depends on one leg's angle alone (their cosines and sines, the leg's
+    row of A, its sphere centre) is computed once per branch, not once per
+    posture."""
+    n = lo.shape[0]
+    trig = np.empty((2, 4, 3, n))
+    for b in range(2):
+        trig[b] = _trig_of(a_lo[b], a_hi[b])
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_PLAIN_SLOTS, w)), np.empty((_PLAIN_SLOTS, w))
+    x, h, t = np.int64(_X), np.int64(_TEMP), np.int64(_TEMP + 2)
+    nat, alt, cm = np.int64(_NAT), np.int64(_ALT), np.int64(_CENTRES)
+    matrix = np.empty(9, dtype=np.int64)
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        for b in range(2):
+            base = np.int64(_PLAIN + _PER_PLAIN * b)
+            arm_trig = base + _P_ARM_TRIG
+            _load(s_lo, s_hi, lo, hi, trig[b], s, size, x, base + _P_TRIG)
+            _rows(s_lo, s_hi, x, base + _P_TRIG, legs, base + _P_ROWS, arm_trig, size)
+            # the centres, as _plain_rest has them
+            for k in range(3):
+                leg = legs[k]
+                c = base + _P_CENTRES + 3 * k
+                slot_sub_c(s_lo, s_hi, arm_trig + 2 * k, leg[OFF_LO], leg[OFF_HI], h, size)
+                slot_mul_c(s_lo, s_hi, h, leg[UX_LO], leg[UX_HI], c, size)
+                slot_mul_c(s_lo, s_hi, h, leg[UY_LO], leg[UY_HI], c + 1, size)
+                slot_negate(s_lo, s_hi, arm_trig + 2 * k + 1, c + 2, size)
+        for p in range(postures.shape[0]):
+            for k in range(3):
+                base = _PLAIN + _PER_PLAIN * postures[p, k]
+                for j in range(3):
+                    matrix[3 * k + j] = base + _P_ROWS + 3 * k + j
+            slot_det3(s_lo, s_hi, matrix, nat, t, size)
+            c1 = _PLAIN + _PER_PLAIN * postures[p, 0] + _P_CENTRES
+            c2 = _PLAIN + _PER_PLAIN * postures[p, 1] + _P_CENTRES + 3
+            c3 = _PLAIN + _PER_PLAIN * postures[p, 2] + _P_CENTRES + 6
+            # P - c_1, c_1 - c_2, c_1 - c_3
+            for e in range(3):
+                slot_sub(s_lo, s_hi, c1 + e, c2 + e, cm + 3 + e, size)
+                slot_sub(s_lo, s_hi, c1 + e, c3 + e, cm + 6 + e, size)
+                slot_sub(s_lo, s_hi, x + e, c1 + e, cm + e, size)
+            for i in range(9):
+                matrix[i] = cm + i
+            slot_det3(s_lo, s_hi, matrix, alt, t, size)
+            for j in range(size):
+                out_lo[p, s + j] = nan_max(s_lo[nat, j], s_lo[alt, j])
+                out_hi[p, s + j] = nan_min(s_hi[nat, j], s_hi[alt, j])

@@ -61,6 +61,7 @@ from ..intervals import Interval
 from ..limits import JointLimit
 from ..types import Array
 from . import _delta_kernels as kernels
+from . import _delta_leg_kernels as leg_kernels
 from .base import (
     FOLD_INNER,
     FOLD_OUTER,
@@ -74,6 +75,9 @@ from .base import (
     round_up,
 )
 from .rr_leg import flat_bounds
+
+#: the reach codes, in the order the kernels of :mod:`._delta_leg_kernels` take them
+_CODES = np.array([REGULAR, FOLD_OUTER, FOLD_INNER, REACH_OUT, REACH_UNKNOWN], dtype=np.uint8)
 
 __all__ = ["Circumradius", "Delta", "DeltaLeg"]
 
@@ -152,6 +156,33 @@ class DeltaLeg:
     def _offset(self) -> Interval:
         """``r - R``, enclosed."""
         return iv.as_interval(self.platform_radius) - self.base_radius
+
+    @cached_property
+    def constants(self) -> Array:
+        """The leg as the kernels of :mod:`._delta_kernels` and
+        :mod:`._delta_leg_kernels` take it (``N_CONSTANTS``,): the enclosures of
+        ``u``, of ``r - R``, of ``la^2 - lb^2`` and of ``1 / la``, computed by
+        the same Interval operations as the reference."""
+        out = np.zeros(kernels.N_CONSTANTS)
+        la = self.arm
+        c = iv.square(iv.as_interval(la)) - iv.square(iv.as_interval(self.rod))
+        divisor = iv.as_interval(la)
+        # Interval.__truediv__'s [1 / hi, 1 / lo], each rounded outwards
+        inv_lo, inv_hi = iv.widen_down(1.0 / divisor.hi), iv.widen_up(1.0 / divisor.lo)
+        _, (ux, uy) = _unit(self.index)
+        offset = self._offset()
+        values: dict[int, Any] = {
+            kernels.UX_LO: ux.lo, kernels.UX_HI: ux.hi,
+            kernels.UY_LO: uy.lo, kernels.UY_HI: uy.hi,
+            kernels.OFF_LO: offset.lo, kernels.OFF_HI: offset.hi,
+            kernels.ARM: la, kernels.TWO_ARM: 2.0 * la,
+            kernels.C_LO: c.lo, kernels.C_HI: c.hi,
+            kernels.INV_LO: inv_lo, kernels.INV_HI: inv_hi,
+        }  # fmt: skip
+        for index, value in values.items():
+            out[index] = float(value)
+        out.flags.writeable = False
+        return out
 
     def _plane(self, points: Array) -> tuple[Array, Array, Array]:
         """``(s, d, z)`` at poses, in floats."""
@@ -263,7 +294,41 @@ class DeltaLeg:
     def joint_gradient(self, lo: Array, hi: Array, branch: int, angles: Interval) -> list[Interval]:
         """``dtheta/dP`` over boxes (``angles`` the branch's enclosure): the
         constraint differentiated, ``-row / (la (s sin theta + z cos theta))``;
-        unbounded where the serial term may vanish."""
+        unbounded where the serial term may vanish.
+
+        Compiled (:func:`._delta_leg_kernels.joint_gradient_bounds`): the bounds
+        of :meth:`_joint_gradient_intervals`, bit for bit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> leg = DeltaLeg(0, 10.0, 4.0, 8.0, 15.0, "theta1")
+        >>> p = np.array([[1.0, 2.0, -12.0]])
+        >>> q = leg.angles(p)[0, 0]
+        >>> grad = leg.joint_gradient(p, p, 0, Interval(q))
+        >>> step = np.array([[1e-7, 0.0, 0.0]])
+        >>> rate = (leg.angles(p + step)[0, 0] - q) / 1e-7
+        >>> bool(abs(rate - grad[0].mid[0]) < 1e-5)
+        True
+        """
+        boxes = _pose_boxes(lo, hi)
+        if boxes is None:
+            return self._joint_gradient_intervals(lo, hi, branch, angles)
+        lo, hi = boxes
+        n = lo.shape[0]
+        bounds = flat_bounds(angles, n)
+        if bounds is None:
+            return self._joint_gradient_intervals(lo, hi, branch, angles)
+        out_lo, out_hi = np.empty((3, n)), np.empty((3, n))
+        leg_kernels.joint_gradient_bounds(
+            lo, hi, bounds[0], bounds[1], self.constants, out_lo, out_hi
+        )
+        return [Interval(out_lo[e], out_hi[e]) for e in range(3)]
+
+    def _joint_gradient_intervals(
+        self, lo: Array, hi: Array, branch: int, angles: Interval
+    ) -> list[Interval]:
+        """:meth:`joint_gradient` by :class:`Interval` operations (the reference)."""
         s, _, z = self._plane_boxes(lo, hi)
         den = (s * iv.sin(angles) + z * iv.cos(angles)) * self.arm
         with _quiet():
@@ -328,7 +393,84 @@ class DeltaLeg:
         FOLD_OUTER where ``g > -1`` on the box and two of its corners (or its
         centre) have ``g < 1`` and ``g > 1``; FOLD_INNER likewise about ``-1``.
         ``fold_connected`` by the monotone-axis argument of :meth:`_fold_axes`.
+
+        Compiled (:func:`._delta_leg_kernels.reach_prepare`, ``reach_turn`` and
+        ``reach_finish``, with numpy's arctan2, cos, sin and arccos between
+        them): the results of :meth:`_reach_intervals`, bit for bit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> leg = DeltaLeg(0, 10.0, 4.0, 8.0, 15.0, "theta1")
+        >>> reach = leg.reach(np.array([[0.9, 1.9, -12.1]]), np.array([[1.1, 2.1, -11.9]]))
+        >>> int(reach.status[0]) == REGULAR
+        True
+        >>> q = leg.angles(np.array([[1.0, 2.0, -12.0]]))[0]
+        >>> bool(reach.branches[0].contains(q[0])[0] and reach.branches[1].contains(q[1])[0])
+        True
         """
+        boxes = _pose_boxes(lo, hi)
+        if boxes is None:
+            return self._reach_intervals(lo, hi)
+        lo, hi = boxes
+        n = lo.shape[0]
+        status, fold = np.empty(n, dtype=np.uint8), np.empty(n, dtype=np.uint8)
+        connected = np.empty(n, dtype=bool)
+        prep = np.empty((leg_kernels.N_PREP, n))
+        leg_kernels.reach_prepare(lo, hi, self.constants, _CODES, status, fold, connected, prep)
+        # the library functions of _direction and arccos, by numpy on contiguous
+        # arrays of the same arguments (see the kernels' notes)
+        theta_m = np.arctan2(prep[leg_kernels.P_W_MID], prep[leg_kernels.P_S_MID])
+        cs, sn = np.cos(theta_m), np.sin(theta_m)
+        ref = np.arctan2(sn, cs)
+        acos = np.arccos(prep[: leg_kernels.P_ACOS_HI + 1])
+        turned = np.empty((4, n))
+        leg_kernels.reach_turn(prep, cs, sn, turned)
+        corners = np.empty((4, n))
+        # (uw, us): lo lo, lo hi, hi lo, hi hi
+        for i, (y, x) in enumerate(((2, 0), (2, 1), (3, 0), (3, 1))):
+            np.arctan2(turned[y], turned[x], out=corners[i])
+        out_lo, out_hi = np.empty((3, n)), np.empty((3, n))
+        leg_kernels.reach_finish(fold, cs, sn, ref, corners, turned, acos, out_lo, out_hi)
+        # kept for the last boxes, for Delta._mean_values and _plain_forms
+        self.__dict__["_last_branches"] = (lo.copy(), hi.copy(), out_lo, out_hi, status.copy())
+        return LegReach(
+            status=status,
+            branches=[Interval(out_lo[0], out_hi[0]), Interval(out_lo[1], out_hi[1])],
+            hull=Interval(out_lo[2], out_hi[2]),
+            fold_connected=connected,
+        )
+
+    def sheet_angles(self, lo: Array, hi: Array) -> tuple[Array, Array] | None:
+        """The angle enclosures of both branches as the sheets take them (the
+        branch's where the leg is regular, else the hull of both), (2, n) lower
+        and upper bounds, from the reach kept of the boxes ``[lo, hi]`` (n, 3)
+        (bit for bit); None where the last reach was of other boxes."""
+        last = self.__dict__.get("_last_branches")
+        if last is None or not (_same_bits(last[0], lo) and _same_bits(last[1], hi)):
+            return None
+        regular = last[4] == REGULAR
+        return (
+            np.stack([np.where(regular, last[2][b], last[2][2]) for b in range(2)]),
+            np.stack([np.where(regular, last[3][b], last[3][2]) for b in range(2)]),
+        )
+
+    def branches_at(self, lo: Array, hi: Array, idx: NDArray[np.intp]) -> tuple[Array, Array]:
+        """The bounds of both branches' enclosures (:meth:`reach`) over the boxes
+        ``idx`` of ``[lo, hi]`` (n, 3), (2, m) each: those of the last boxes'
+        reach where ``[lo, hi]`` are those boxes (bit for bit), else the reach of
+        the boxes ``idx``."""
+        last = self.__dict__.get("_last_branches")
+        if last is not None and _same_bits(last[0], lo) and _same_bits(last[1], hi):
+            return last[2][:2, idx], last[3][:2, idx]
+        reach = self.reach(lo[idx], hi[idx])
+        return (
+            np.stack([reach.branches[0].lo, reach.branches[1].lo]),
+            np.stack([reach.branches[0].hi, reach.branches[1].hi]),
+        )
+
+    def _reach_intervals(self, lo: Array, hi: Array) -> LegReach:
+        """:meth:`reach` by :class:`Interval` operations (the reference)."""
         n = lo.shape[0]
         s, d, z = self._plane_boxes(lo, hi)
         t = iv.sqrt(iv.square(s) + iv.square(z))
@@ -465,7 +607,65 @@ class DeltaLeg:
         ``sin alpha`` falls to 0: the enclosure keeps the lower bound ``1 / max sin
         alpha`` of ``1 / sin alpha``. ``cache`` (one per boxes and branch) keeps what
         does not depend on the velocity.
+
+        Compiled (:func:`._delta_leg_kernels.fold_terms_prepare`,
+        ``fold_terms_finish`` and ``fold_rate_bounds``), over the boxes where the
+        leg may fold only: there the results of :meth:`_fold_flow_intervals`,
+        bit for bit; elsewhere ``keeps`` is false (as there) and the rate the
+        whole line (the reference's rate there is meaningless).
         """
+        boxes = _pose_boxes(lo, hi)
+        if boxes is None or len(velocity) != 3:
+            return self._fold_flow_intervals(lo, hi, status, branch, velocity, cache)
+        n = boxes[0].shape[0]
+        parts = [flat_bounds(v, n) for v in velocity]
+        if parts[0] is None or parts[1] is None or parts[2] is None:
+            return self._fold_flow_intervals(lo, hi, status, branch, velocity, cache)
+        codes = np.ascontiguousarray(np.broadcast_to(status, (n,)), dtype=np.uint8)
+        kept = None if cache is None else cache.get("fold_compiled")
+        if kept is None or not np.array_equal(kept[0], codes):
+            folds = np.flatnonzero((codes == FOLD_OUTER) | (codes == FOLD_INNER))
+            terms = self._fold_terms_compiled(boxes[0][folds], boxes[1][folds])
+            kept = (codes.copy(), folds, terms)
+            if cache is not None:
+                cache["fold_compiled"] = kept
+        _, folds, terms = kept
+        v_lo = np.stack([parts[0][0][folds], parts[1][0][folds], parts[2][0][folds]])
+        v_hi = np.stack([parts[0][1][folds], parts[1][1][folds], parts[2][1][folds]])
+        sub_keeps = np.empty(folds.size, dtype=bool)
+        sub_lo, sub_hi = np.empty(folds.size), np.empty(folds.size)
+        leg_kernels.fold_rate_bounds(
+            terms[0], terms[1], v_lo, v_hi, codes[folds], _CODES, 1.0 if branch == 0 else -1.0,
+            self.constants, sub_keeps, sub_lo, sub_hi,
+        )  # fmt: skip
+        keeps = np.zeros(n, dtype=bool)
+        out_lo, out_hi = np.full(n, -_INF), np.full(n, _INF)
+        keeps[folds], out_lo[folds], out_hi[folds] = sub_keeps, sub_lo, sub_hi
+        return keeps, Interval(out_lo, out_hi)
+
+    def _fold_terms_compiled(self, lo: Array, hi: Array) -> tuple[Array, Array]:
+        """The bounds of :meth:`_fold_terms`, (``N_TERMS``, n) each (see
+        :func:`._delta_leg_kernels.fold_terms_prepare`)."""
+        n = lo.shape[0]
+        terms_lo, terms_hi = np.empty((leg_kernels.N_TERMS, n)), np.empty((leg_kernels.N_TERMS, n))
+        args = np.empty((2, n))
+        leg_kernels.fold_terms_prepare(lo, hi, self.constants, terms_lo, terms_hi, args)
+        acos = np.empty((2, n))
+        np.arccos(args[0], out=acos[0])
+        np.arccos(args[1], out=acos[1])
+        leg_kernels.fold_terms_finish(acos, terms_lo, terms_hi)
+        return terms_lo, terms_hi
+
+    def _fold_flow_intervals(
+        self,
+        lo: Array,
+        hi: Array,
+        status: NDArray[np.uint8],
+        branch: int,
+        velocity: list[Interval],
+        cache: dict[str, Any] | None = None,
+    ) -> tuple[NDArray[np.bool_], Interval]:
+        """:meth:`fold_flow` by :class:`Interval` operations (the reference)."""
         terms = None if cache is None else cache.get("fold")
         if terms is None:
             terms = self._fold_terms(lo, hi)
@@ -560,6 +760,12 @@ def _dot(a: list[Interval], b: list[Interval]) -> Interval:
 
 def _minus(a: list[Interval], b: list[Interval]) -> list[Interval]:
     return [x - y for x, y in zip(a, b, strict=True)]
+
+
+def _same_bits(a: Array, b: Array) -> bool:
+    """Whether two float arrays hold the same floats, bit for bit."""
+    a, b = np.ascontiguousarray(a), np.ascontiguousarray(b)
+    return a.shape == b.shape and bool(np.array_equal(a.view(np.uint64), b.view(np.uint64)))
 
 
 def _no_nan(x: Interval) -> Interval:
@@ -765,28 +971,8 @@ class Delta(Mechanism):
     @cached_property
     def _leg_constants(self) -> Array:
         """The legs as the kernels of :mod:`._delta_kernels` take them (3,
-        ``N_CONSTANTS``): the enclosures of ``u``, of ``r - R``, of ``la^2 - lb^2``
-        and of ``1 / la``, computed by the same Interval operations as the
-        reference."""
-        out = np.zeros((3, kernels.N_CONSTANTS))
-        la = self.arm
-        c = iv.square(iv.as_interval(la)) - iv.square(iv.as_interval(self.rod))
-        divisor = iv.as_interval(la)
-        # Interval.__truediv__'s [1 / hi, 1 / lo], each rounded outwards
-        inv_lo, inv_hi = iv.widen_down(1.0 / divisor.hi), iv.widen_up(1.0 / divisor.lo)
-        for i, leg in enumerate(self.delta_legs):
-            _, (ux, uy) = _unit(i)
-            offset = leg._offset()
-            values: dict[int, Any] = {
-                kernels.UX_LO: ux.lo, kernels.UX_HI: ux.hi,
-                kernels.UY_LO: uy.lo, kernels.UY_HI: uy.hi,
-                kernels.OFF_LO: offset.lo, kernels.OFF_HI: offset.hi,
-                kernels.ARM: la, kernels.TWO_ARM: 2.0 * la,
-                kernels.C_LO: c.lo, kernels.C_HI: c.hi,
-                kernels.INV_LO: inv_lo, kernels.INV_HI: inv_hi,
-            }  # fmt: skip
-            for index, value in values.items():
-                out[i, index] = float(value)
+        ``N_CONSTANTS``): their :attr:`DeltaLeg.constants` stacked."""
+        out = np.stack([leg.constants for leg in self.delta_legs])
         out.flags.writeable = False
         return out
 
@@ -832,22 +1018,102 @@ class Delta(Mechanism):
         a_lo = np.stack([parts[0][0], parts[1][0], parts[2][0]])
         a_hi = np.stack([parts[0][1], parts[1][1], parts[2][1]])
         legs = self._leg_constants
-        out_lo, out_hi = np.empty(n), np.empty(n)
-        trig = np.empty((4, 3, n))
-        kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, out_lo, out_hi, trig)
+        trig = None
+        plain = None if posture is None else self._plain_forms(lo, hi)
+        branches = np.asarray(self.postures[posture or 0], dtype=np.int64)
+        if plain is not None and all(
+            _same_bits(a_lo[k], plain[2][branches[k], k])
+            and _same_bits(a_hi[k], plain[3][branches[k], k])
+            for k in range(3)
+        ):
+            # the angles are the legs' as the sheets take them: every posture's
+            # enclosure, computed at the first
+            out_lo, out_hi = plain[0][posture].copy(), plain[1][posture].copy()
+        else:
+            out_lo, out_hi = np.empty(n), np.empty(n)
+            trig = np.empty((4, 3, n))
+            kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, out_lo, out_hi, trig)
         if posture is None:
             return Interval(out_lo, out_hi)
         idx, centre_trig = self._centres(lo, hi)
         if not idx.size:
             return Interval(out_lo, out_hi)
         sub_lo, sub_hi = out_lo[idx], out_hi[idx]
-        branches = np.asarray(self.postures[posture], dtype=np.int64)
-        kernels.mean_value_bounds(
-            lo[idx], hi[idx], np.ascontiguousarray(trig[:, :, idx]), branches, centre_trig, legs,
-            sub_lo, sub_hi,
-        )  # fmt: skip
+        forms = self._mean_values(lo, hi, idx, centre_trig)
+        if all(
+            _same_bits(a_lo[k, idx], forms[2][branches[k], k])
+            and _same_bits(a_hi[k, idx], forms[3][branches[k], k])
+            for k in range(3)
+        ):
+            # the angles are the legs' branches there (as the sheets take them):
+            # the form of every posture, computed at the first
+            kernels.intersect_finite(forms[0][posture], forms[1][posture], sub_lo, sub_hi)
+        else:
+            if trig is None:
+                # the cosines and sines of the angles (the enclosures unused)
+                trig = np.empty((4, 3, n))
+                kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, np.empty(n), np.empty(n), trig)
+            kernels.mean_value_bounds(
+                lo[idx], hi[idx], np.ascontiguousarray(trig[:, :, idx]), branches, centre_trig,
+                legs, sub_lo, sub_hi,
+            )  # fmt: skip
         out_lo[idx], out_hi[idx] = sub_lo, sub_hi
         return Interval(out_lo, out_hi)
+
+    def _plain_forms(self, lo: Array, hi: Array) -> tuple[Array, Array, Array, Array] | None:
+        """The enclosure of :meth:`_det_a_plain` of every posture over the boxes
+        (n, 3), with the legs' angles as the sheets take them (each leg's
+        branch where it is regular, else the hull of both) from the reach the
+        legs have kept of these boxes (:meth:`DeltaLeg.sheet_angles`): (P, n)
+        lower and upper bounds, then the angles' bounds (2, 3, n) they were
+        computed with; None where a leg kept no reach of these boxes. By
+        :func:`._delta_kernels.det_a_all`: what depends on one leg's angle alone
+        is computed once for the postures, not once for each. Kept for the last
+        boxes."""
+        kept = [leg.__dict__.get("_last_branches") for leg in self.delta_legs]
+        last = self.__dict__.get("_last_plain")
+        if last is not None and all(a is b for a, b in zip(last[0], kept, strict=True)):
+            return last[1], last[2], last[3], last[4]
+        a_lo, a_hi = np.empty((2, 3, lo.shape[0])), np.empty((2, 3, lo.shape[0]))
+        for k, leg in enumerate(self.delta_legs):
+            angles = leg.sheet_angles(lo, hi)
+            if angles is None:
+                return None
+            a_lo[:, k], a_hi[:, k] = angles
+        postures = np.ascontiguousarray(self.postures, dtype=np.int64)
+        n_post = postures.shape[0]
+        forms_lo, forms_hi = np.empty((n_post, lo.shape[0])), np.empty((n_post, lo.shape[0]))
+        kernels.det_a_all(lo, hi, a_lo, a_hi, postures, self._leg_constants, forms_lo, forms_hi)
+        self.__dict__["_last_plain"] = (tuple(kept), forms_lo, forms_hi, a_lo, a_hi)
+        return forms_lo, forms_hi, a_lo, a_hi
+
+    def _mean_values(
+        self, lo: Array, hi: Array, idx: NDArray[np.intp], centre_trig: Array
+    ) -> tuple[Array, Array, Array, Array]:
+        """The mean-value form of every posture (not intersected) over the boxes
+        ``idx`` where every leg is regular (from :meth:`_centres`, whose ``idx``
+        and ``centre_trig`` they are), with the legs' branches' enclosures there
+        (:meth:`DeltaLeg.branches_at`): (P, m) lower and upper bounds, then the
+        branches' bounds (2, 3, m) they were computed with. By
+        :func:`._delta_kernels.mean_value_all`: what depends on one leg's branch
+        alone is computed once for the postures, not once for each. Kept for the
+        last boxes (the sheets ask for every posture over the same boxes)."""
+        last = self.__dict__.get("_last_forms")
+        if last is not None and last[0] is idx:
+            return last[1], last[2], last[3], last[4]
+        blo, bhi = lo[idx], hi[idx]
+        m = idx.size
+        b_lo, b_hi = np.empty((2, 3, m)), np.empty((2, 3, m))
+        for k, leg in enumerate(self.delta_legs):
+            # the sheets have just taken the reach of these boxes
+            b_lo[:, k], b_hi[:, k] = leg.branches_at(lo, hi, idx)
+        postures = np.ascontiguousarray(self.postures, dtype=np.int64)
+        forms_lo, forms_hi = np.empty((postures.shape[0], m)), np.empty((postures.shape[0], m))
+        kernels.mean_value_all(
+            blo, bhi, b_lo, b_hi, postures, centre_trig, self._leg_constants, forms_lo, forms_hi
+        )
+        self.__dict__["_last_forms"] = (idx, forms_lo, forms_hi, b_lo, b_hi)
+        return forms_lo, forms_hi, b_lo, b_hi
 
     def _centres(self, lo: Array, hi: Array) -> tuple[NDArray[np.intp], Array]:
         """The boxes where every leg is regular, and the cosines and sines of both
