@@ -112,6 +112,17 @@ def _assert_all_same(mechanism: ThreeRPR, lo: np.ndarray, hi: np.ndarray) -> Non
                     _assert_same(x, y)
             for x, y in zip(along_q, ref_q, strict=True):
                 _assert_same(x, y)
+        # the reaches and det A in one pass (the sheets' classification)
+        reaches, det = mechanism.reaches_and_det(lo, hi)
+        assert det is not None
+        _assert_same(det, mechanism._det_a_boxes_intervals(lo, hi, angles))
+        for leg, fused in zip(mechanism.rpr_legs, reaches, strict=True):
+            length = leg._length_intervals(lo, hi)
+            _assert_same(fused.hull, length)
+            assert len(fused.branches) == 1
+            _assert_same(fused.branches[0], length)
+            np.testing.assert_array_equal(fused.status, np.where(length.lo > 0, 1, 4))
+            assert not fused.fold_connected.any()
         for leg in mechanism.rpr_legs:
             reach = leg.reach(lo, hi)
             length = leg._length_intervals(lo, hi)

@@ -120,7 +120,8 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
     """Certify the posture sheets of ``mechanism`` over boxes ``[lo, hi]`` (n, k)."""
     legs = mechanism.legs
     n = lo.shape[0]
-    reaches = [leg.reach(lo, hi) for leg in legs]
+    # det A too where it depends on the pose alone (computed with the reaches)
+    reaches, pose_det = mechanism.reaches_and_det(lo, hi)
     leg_status = np.stack([r.status for r in reaches], axis=1).astype(np.uint8)
     postures = mechanism.postures
     n_post = postures.shape[0]
@@ -190,8 +191,11 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         if beyond is not None:
             lim_in &= beyond == INSIDE
             lim_out |= beyond == OUTSIDE
-        with np.errstate(invalid="ignore"):
-            det = mechanism.det_a_boxes(lo, hi, angles, posture=p)
+        if pose_det is not None:
+            det = pose_det
+        else:
+            with np.errstate(invalid="ignore"):
+                det = mechanism.det_a_boxes(lo, hi, angles, posture=p)
         if signs is not None:
             no_plus, no_minus = signs
             lim_out |= no_plus & no_minus

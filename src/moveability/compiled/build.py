@@ -104,6 +104,7 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         (R2, R2, R2, R1, R1, R1, W2, W2)
     ],
     "moveability.mechanisms._rpr_kernels.reach_bounds": [(R2, R2, R2, R1, W1, W1)],
+    "moveability.mechanisms._rpr_kernels.pose_bounds": [(R2, R2, R2, W2, W2, W1, W1)],
     "moveability.mechanisms._rr_kernels.knee_bounds": [(R1, R1, R1, W2, W2)],
     "moveability.mechanisms._rr_kernels.det_a_bounds": [(R2, R2, R2, R2, R2, array(I8), W1, W1)],
     "moveability.mechanisms._rr_kernels.reach_prepare": [
