@@ -106,9 +106,17 @@ class SheetTable:
 
     def statuses(self) -> NDArray[np.uint8]:
         """A tree status per box: OUT where no sheet holds a valid configuration, IN
-        where every sheet is decided, BOUNDARY elsewhere."""
-        dead = (self.status == OUT).all(axis=1)
-        return np.where(dead, OUT, np.where(self.decided(), IN, BOUNDARY)).astype(np.uint8)
+        where every sheet is decided, BOUNDARY elsewhere.
+
+        Computed once per table (its arrays are not changed in place: a table is
+        rebuilt, by :meth:`take` or :func:`stack_tables`); each call returns a copy."""
+        cached = self.__dict__.get("_statuses")
+        if cached is None:
+            dead = (self.status == OUT).all(axis=1)
+            cached = np.where(dead, OUT, np.where(self.decided(), IN, BOUNDARY)).astype(np.uint8)
+            # a frozen dataclass: the cache is set past its __setattr__ (not a field)
+            object.__setattr__(self, "_statuses", cached)
+        return np.array(cached)
 
     def decided(self) -> NDArray[np.bool_]:
         """Boxes where no leg folds and every sheet is IN, OUT or identically singular."""
@@ -136,24 +144,32 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
     angles_hi = np.zeros((n, n_post, len(legs)))
 
     singular = np.array([mechanism.identically_singular(p) for p in range(n_post)], dtype=bool)
-    # limits of each leg branch, and of each leg's hull where it folds
-    branch_limits = [
-        [mechanism.limits[i].classify(b) for b in reaches[i].branches] for i in range(len(legs))
-    ]
+    # limits of each leg's hull where it folds, and of each branch (the hull's
+    # codes where a leg's branch is its hull)
     hull_limits = [mechanism.limits[i].classify(reaches[i].hull) for i in range(len(legs))]
+    branch_limits = [
+        [
+            hull_limits[i] if b is reaches[i].hull else mechanism.limits[i].classify(b)
+            for b in reaches[i].branches
+        ]
+        for i in range(len(legs))
+    ]
     folding = (leg_status != REGULAR) & (leg_status != REACH_OUT)
     any_out = (leg_status == REACH_OUT).any(axis=1)
     any_unknown = (leg_status == REACH_UNKNOWN).any(axis=1)
     fold_count = folding.sum(axis=1)
+    # the legs that fold in some box (a leg that folds in none joins no group)
+    folds = folding.any(axis=0)
+    fold_legs = [i for i in range(len(legs)) if folds[i]]
 
     # geometry: the configurations of the folding legs over the box all join
     fold_ok = np.zeros(n, dtype=bool)
     single = fold_count == 1
-    for i in range(len(legs)):
+    for i in fold_legs:
         fold_ok |= single & folding[:, i] & reaches[i].fold_connected
     if len(legs) >= 2:
-        for i in range(len(legs)):
-            for j in range(i + 1, len(legs)):
+        for i in fold_legs:
+            for j in (j for j in fold_legs if j > i):
                 pair = (fold_count == 2) & folding[:, i] & folding[:, j]
                 pair &= (leg_status[:, i] == FOLD_OUTER) | (leg_status[:, i] == FOLD_INNER)
                 pair &= (leg_status[:, j] == FOLD_OUTER) | (leg_status[:, j] == FOLD_INNER)
@@ -169,17 +185,22 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
             r = reaches[i]
             # a branch's own enclosure where the leg is regular, or folds and the leg
             # encloses each branch there too; else the hull of both
-            regular = leg_status[:, i] == REGULAR
-            if getattr(legs[i], "branches_at_folds", False):
-                regular = regular | (folding[:, i] & (leg_status[:, i] != REACH_UNKNOWN))
-            a = Interval(
-                np.where(regular, r.branches[b].lo, r.hull.lo),
-                np.where(regular, r.branches[b].hi, r.hull.hi),
-            )
+            if r.branches[b] is r.hull:
+                # the leg's branch is its hull: the same enclosure and codes everywhere
+                a = Interval(np.array(r.hull.lo), np.array(r.hull.hi))
+                code = hull_limits[i]
+            else:
+                regular = leg_status[:, i] == REGULAR
+                if getattr(legs[i], "branches_at_folds", False):
+                    regular = regular | (folding[:, i] & (leg_status[:, i] != REACH_UNKNOWN))
+                a = Interval(
+                    np.where(regular, r.branches[b].lo, r.hull.lo),
+                    np.where(regular, r.branches[b].hi, r.hull.hi),
+                )
+                code = np.where(regular, branch_limits[i][b], hull_limits[i])
             angles.append(a)
             angles_lo[:, p, i] = a.lo
             angles_hi[:, p, i] = a.hi
-            code = np.where(regular, branch_limits[i][b], hull_limits[i])
             lim_in &= code == INSIDE
             lim_out |= code == OUTSIDE
         # passive limits, obstacles, collisions: part of what a valid configuration

@@ -18,8 +18,9 @@ Python between the operations.
 A leg enters as ``(A_x, A_y, b_x, b_y)``: its base joint and its platform joint
 in the platform frame. Boxes of poses are (n, 3) C-contiguous arrays ``lo``,
 ``hi`` of ``(x, y, phi)``, with ``trig`` (4, n): the bounds of the cosine of
-their phi, then of its sine (``intervals.cos`` and ``sin``); :func:`pose_bounds`
-computes them itself.
+their phi, then of its sine (``intervals.cos`` and ``sin``), or (4, 0)
+(:data:`NO_TRIG`): the kernel computes them itself, box by box (the same
+floats), as :func:`pose_bounds` always does.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from ..compiled import kernel
 from ..intervals import (
     Slot,
     interval_cos,
+    interval_mul,
     interval_sin,
     next_below,
     point_sin_cos,
@@ -101,14 +103,26 @@ def _load(
     c: Slot,
 ) -> None:  # pragma: no cover - compiled
     """The boxes ``s:s + w``: their coordinates into slots ``x``, ``x + 1``, ``x +
-    2``, the cosine and sine of their phi (``trig``: (4, n), the bounds of the
-    cosine then of the sine) into slots ``c``, ``c + 1``."""
+    2``, the cosine and sine of their phi into slots ``c``, ``c + 1``: from
+    ``trig`` ((4, n): the bounds of the cosine then of the sine), or computed here
+    when ``trig`` holds no column ((4, 0): ``interval_cos`` and ``interval_sin``,
+    the elements of ``intervals.cos`` and ``sin``)."""
+    given = trig.shape[1] > 0
     for j in range(w):
         for axis in range(3):
             lo[x + axis, j] = box_lo[s + j, axis]
             hi[x + axis, j] = box_hi[s + j, axis]
-        lo[c, j], hi[c, j] = trig[0, s + j], trig[1, s + j]
-        lo[c + 1, j], hi[c + 1, j] = trig[2, s + j], trig[3, s + j]
+        if given:
+            lo[c, j], hi[c, j] = trig[0, s + j], trig[1, s + j]
+            lo[c + 1, j], hi[c + 1, j] = trig[2, s + j], trig[3, s + j]
+        else:
+            a, b = box_lo[s + j, 2], box_hi[s + j, 2]
+            lo[c, j], hi[c, j] = interval_cos(a, b)
+            lo[c + 1, j], hi[c + 1, j] = interval_sin(a, b)
+
+
+#: the ``trig`` of the kernels that compute the cosine and sine themselves
+NO_TRIG = np.empty((4, 0))
 
 
 #: the ``partials`` of :func:`_leg`: none; none and no turn either
@@ -197,6 +211,52 @@ def _length(
         out_hi[s + j] = high
 
 
+@kernel
+def _mul_known(
+    lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int, one: Slot, zero: Slot
+) -> None:  # pragma: no cover - compiled
+    """``slot_mul`` where a factor may be the constant slot ``one`` ([1, 1]) or
+    ``zero`` ([0, 0]): a product with ``[0, 0]`` is ``[0.0, 0.0]`` whatever the
+    other factor (each bound product is a zero, or NaN taken as 0; none is an
+    underflow), and one with ``[1, 1]`` is ``interval_mul`` with the constant
+    known (its products exact): the floats of ``slot_mul``, with less work."""
+    if a == zero or b == zero:
+        for j in range(w):
+            lo[o, j] = 0.0
+            hi[o, j] = 0.0
+    elif a == one:
+        for j in range(w):
+            lo[o, j], hi[o, j] = interval_mul(1.0, 1.0, lo[b, j], hi[b, j])
+    elif b == one:
+        for j in range(w):
+            lo[o, j], hi[o, j] = interval_mul(lo[a, j], hi[a, j], 1.0, 1.0)
+    else:
+        slot_mul(lo, hi, a, b, o, w)
+
+
+@kernel
+def _det3_known(
+    lo: Array, hi: Array, m: NDArray[np.int64], o: Slot, t: Slot, w: int, one: Slot, zero: Slot
+) -> None:  # pragma: no cover - compiled
+    """``intervals.slot_det3`` (the same steps) with its products by
+    :func:`_mul_known`, for matrices holding the slots ``one`` and ``zero``."""
+    p, q = t, t + 1
+    _mul_known(lo, hi, m[4], m[8], p, w, one, zero)
+    _mul_known(lo, hi, m[5], m[7], q, w, one, zero)
+    slot_sub(lo, hi, p, q, p, w)
+    _mul_known(lo, hi, m[0], p, o, w, one, zero)
+    _mul_known(lo, hi, m[3], m[8], p, w, one, zero)
+    _mul_known(lo, hi, m[5], m[6], q, w, one, zero)
+    slot_sub(lo, hi, p, q, p, w)
+    _mul_known(lo, hi, m[1], p, q, w, one, zero)
+    slot_sub(lo, hi, o, q, o, w)
+    _mul_known(lo, hi, m[3], m[7], p, w, one, zero)
+    _mul_known(lo, hi, m[4], m[6], q, w, one, zero)
+    slot_sub(lo, hi, p, q, p, w)
+    _mul_known(lo, hi, m[2], p, q, w, one, zero)
+    slot_add(lo, hi, o, q, o, w)
+
+
 # the slots of det_a_bounds
 _X, _C, _MX, _MC = 0, 3, 5, 8  # box (x, y, phi), its cos, sin; the same at the centre
 _ROWS, _MROWS, _PARTS = 10, 19, 28  # leg k's row at + 3 k; its partials at _PARTS + 3 k
@@ -269,9 +329,9 @@ def _det(
             else:
                 matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = part, part + 1, part + 2
             if k == 0:
-                slot_det3(s_lo, s_hi, matrix, total, temp, size)
+                _det3_known(s_lo, s_hi, matrix, total, temp, size, one, zero)
             else:
-                slot_det3(s_lo, s_hi, matrix, term, temp, size)
+                _det3_known(s_lo, s_hi, matrix, term, temp, size, one, zero)
                 slot_add(s_lo, s_hi, total, term, total, size)
         # + dD/dx_j * (x_j - c_j)
         slot_sub(s_lo, s_hi, x + axis, mx + axis, width, size)
@@ -334,13 +394,7 @@ def pose_bounds(
     n = lo.shape[0]
     for s in range(0, n, w):
         size = min(w, n - s)
-        for j in range(size):
-            for axis in range(3):
-                s_lo[x + axis, j] = lo[s + j, axis]
-                s_hi[x + axis, j] = hi[s + j, axis]
-            a, b = lo[s + j, 2], hi[s + j, 2]
-            s_lo[c, j], s_hi[c, j] = interval_cos(a, b)
-            s_lo[c + 1, j], s_hi[c + 1, j] = interval_sin(a, b)
+        _load(s_lo, s_hi, lo, hi, np.empty((4, 0)), s, size, x, c)
         _rows(s_lo, s_hi, lo, hi, s, size, legs, rows, centre)
         for k in range(3):
             _length(s_lo, s_hi, rows[3 * k], temp, s, size, len_lo[k], len_hi[k])

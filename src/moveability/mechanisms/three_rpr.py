@@ -67,15 +67,15 @@ def _trig(lo: Array, hi: Array) -> tuple[Interval, Interval]:
 
 def _pose_boxes(lo: Array, hi: Array) -> tuple[Array, Array, Array] | None:
     """The boxes as the compiled kernels take them: (n, 3) contiguous float arrays
-    (the first three columns) and the bounds of the cosine and sine of their phi
-    (4, n); None when they are not (n, k >= 3) arrays."""
+    (the first three columns) and :data:`._rpr_kernels.NO_TRIG` (the kernels
+    compute the bounds of the cosine and sine of phi box by box); None when they
+    are not (n, k >= 3) arrays."""
     lo_a = np.asarray(lo, dtype=np.float64)
     hi_a = np.asarray(hi, dtype=np.float64)
     if lo_a.ndim != 2 or lo_a.shape[1] < 3 or hi_a.shape != lo_a.shape:
         return None
     lo_a, hi_a = np.ascontiguousarray(lo_a[:, :3]), np.ascontiguousarray(hi_a[:, :3])
-    c, s = _trig(lo_a, hi_a)
-    return lo_a, hi_a, np.stack([c.lo, c.hi, s.lo, s.hi])
+    return lo_a, hi_a, kernels.NO_TRIG
 
 
 def _length_reach(rho: Interval) -> LegReach:
@@ -394,18 +394,13 @@ class ThreeRPR(Mechanism):
         >>> bool(reaches[1].hull.lo[0] == m.legs[1].reach(lo, hi).hull.lo[0])
         True
         """
-        lo_a = np.asarray(lo, dtype=np.float64)
-        hi_a = np.asarray(hi, dtype=np.float64)
-        fused = (
-            lo_a.ndim == 2
-            and lo_a.shape[1] >= 3
-            and hi_a.shape == lo_a.shape
-            and type(self).det_a_boxes is ThreeRPR.det_a_boxes
-            and all(type(leg).reach is RPRLeg.reach for leg in self.legs)
+        boxes = _pose_boxes(lo, hi)
+        fused = type(self).det_a_boxes is ThreeRPR.det_a_boxes and all(
+            type(leg).reach is RPRLeg.reach for leg in self.legs
         )
-        if not fused:
+        if boxes is None or not fused:
             return super().reaches_and_det(lo, hi)
-        lo_a, hi_a = np.ascontiguousarray(lo_a[:, :3]), np.ascontiguousarray(hi_a[:, :3])
+        lo_a, hi_a, _ = boxes
         n = lo_a.shape[0]
         len_lo, len_hi = np.empty((3, n)), np.empty((3, n))
         det_lo, det_hi = np.empty(n), np.empty(n)
@@ -419,9 +414,7 @@ class ThreeRPR(Mechanism):
         """:meth:`det_a_boxes` by :class:`Interval` operations (the reference)."""
         # the legs share the cosine and sine of phi
         trig = _trig(lo, hi)
-        rows = [
-            leg.a_row_boxes(lo, hi, angles[i], trig) for i, leg in enumerate(self.rpr_legs)
-        ]
+        rows = [leg.a_row_boxes(lo, hi, angles[i], trig) for i, leg in enumerate(self.rpr_legs)]
         natural = interval_det(rows)
         mid = 0.5 * (lo + hi)
         trig_mid = _trig(mid, mid)
