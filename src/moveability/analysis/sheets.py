@@ -112,7 +112,7 @@ class SheetTable:
         rebuilt, by :meth:`take` or :func:`stack_tables`); each call returns a copy."""
         cached = self.__dict__.get("_statuses")
         if cached is None:
-            dead = (self.status == OUT).all(axis=1)
+            dead = _rows_all(self.status == OUT)
             cached = np.where(dead, OUT, np.where(self.decided(), IN, BOUNDARY)).astype(np.uint8)
             # a frozen dataclass: the cache is set past its __setattr__ (not a field)
             object.__setattr__(self, "_statuses", cached)
@@ -121,7 +121,33 @@ class SheetTable:
     def decided(self) -> NDArray[np.bool_]:
         """Boxes where no leg folds and every sheet is IN, OUT or identically singular."""
         settled = (self.status != BOUNDARY) | self.singular
-        return ~self.folding.any(axis=1) & settled.all(axis=1)
+        return ~_rows_any(self.folding) & _rows_all(settled)
+
+
+# reductions along the rows of (n, m) tables of few columns (legs, postures): one
+# pass per column (numpy reduces a short axis row by row, several times slower)
+def _rows_any(a: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """``a.any(axis=1)``."""
+    out = np.zeros(a.shape[0], dtype=bool)
+    for j in range(a.shape[1]):
+        out |= a[:, j]
+    return out
+
+
+def _rows_all(a: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """``a.all(axis=1)``."""
+    out = np.ones(a.shape[0], dtype=bool)
+    for j in range(a.shape[1]):
+        out &= a[:, j]
+    return out
+
+
+def _rows_count(a: NDArray[np.bool_]) -> NDArray[np.int64]:
+    """``a.sum(axis=1)``: the True entries of each row."""
+    out = np.zeros(a.shape[0], dtype=np.int64)
+    for j in range(a.shape[1]):
+        out += a[:, j]
+    return out
 
 
 def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
@@ -155,19 +181,20 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         for i in range(len(legs))
     ]
     folding = (leg_status != REGULAR) & (leg_status != REACH_OUT)
-    any_out = (leg_status == REACH_OUT).any(axis=1)
-    any_unknown = (leg_status == REACH_UNKNOWN).any(axis=1)
-    fold_count = folding.sum(axis=1)
+    any_out = _rows_any(leg_status == REACH_OUT)
+    any_unknown = _rows_any(leg_status == REACH_UNKNOWN)
     # the legs that fold in some box (a leg that folds in none joins no group)
     folds = folding.any(axis=0)
     fold_legs = [i for i in range(len(legs)) if folds[i]]
+    any_fold = _rows_any(folding)
 
     # geometry: the configurations of the folding legs over the box all join
     fold_ok = np.zeros(n, dtype=bool)
-    single = fold_count == 1
-    for i in fold_legs:
-        fold_ok |= single & folding[:, i] & reaches[i].fold_connected
-    if len(legs) >= 2:
+    if fold_legs:
+        fold_count = _rows_count(folding)
+        single = fold_count == 1
+        for i in fold_legs:
+            fold_ok |= single & folding[:, i] & reaches[i].fold_connected
         for i in fold_legs:
             for j in (j for j in fold_legs if j > i):
                 pair = (fold_count == 2) & folding[:, i] & folding[:, j]
@@ -228,7 +255,7 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         positive = det.lo > 0
         negative = det.hi < 0
         sign[:, p] = np.where(positive, 1, np.where(negative, -1, 0))
-        all_regular = ~folding.any(axis=1) & ~any_out
+        all_regular = ~any_fold & ~any_out
         exists[:, p] = all_regular
         within[:, p] = lim_in
         dead = any_out | lim_out
