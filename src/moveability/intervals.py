@@ -43,8 +43,10 @@ __all__ = [
     "holds_angle",
     "hull",
     "interval_add",
+    "interval_cos",
     "interval_div",
     "interval_mul",
+    "interval_sin",
     "interval_sqrt",
     "interval_square",
     "interval_sub",
@@ -77,6 +79,7 @@ __all__ = [
     "sub_into",
     "tan",
     "trig_bounds",
+    "trig_one",
     "widen_down",
     "widen_up",
 ]
@@ -674,6 +677,34 @@ def may_contain_angle(x: Interval, phase: float | NDArray[np.float64]) -> NDArra
     return _holds_angles(lo, hi, ph).reshape(shape)
 
 
+@kernel(inline=True)
+def trig_one(
+    a: float, b: float, sine: bool, rel: float, tiny: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """One element of :func:`_trig_bounds`: the range of ``sin`` (or ``cos``) over
+    ``[a, b]``, for compiled code (inlined: the same floats)."""
+    top = 0.5 * np.pi if sine else 0.0
+    bottom = -0.5 * np.pi if sine else np.pi
+    fa = np.sin(a) if sine else np.cos(a)
+    fb = np.sin(b) if sine else np.cos(b)
+    if fa != fa or fb != fb:
+        low = np.nan
+        high = np.nan
+    else:
+        low = min(fa, fb)
+        high = max(fa, fb)
+    wide = b - a >= _TWO_PI
+    if wide or _holds_angle(a, b, bottom):
+        low = -1.0
+    else:
+        low = _below(low, rel, tiny, False)
+    if wide or _holds_angle(a, b, top):
+        high = 1.0
+    else:
+        high = _above(high, rel, tiny, False)
+    return (low if low != low else max(low, -1.0)), (high if high != high else min(high, 1.0))
+
+
 @kernel
 def _trig_bounds(
     lo: Array, hi: Array, sine: bool, rel: float, tiny: float
@@ -684,30 +715,8 @@ def _trig_bounds(
     n = lo.size
     out_lo = np.empty(n)
     out_hi = np.empty(n)
-    top = 0.5 * np.pi if sine else 0.0
-    bottom = -0.5 * np.pi if sine else np.pi
     for i in range(n):
-        a = lo[i]
-        b = hi[i]
-        fa = np.sin(a) if sine else np.cos(a)
-        fb = np.sin(b) if sine else np.cos(b)
-        if fa != fa or fb != fb:
-            low = np.nan
-            high = np.nan
-        else:
-            low = min(fa, fb)
-            high = max(fa, fb)
-        wide = b - a >= _TWO_PI
-        if wide or _holds_angle(a, b, bottom):
-            low = -1.0
-        else:
-            low = _below(low, rel, tiny, False)
-        if wide or _holds_angle(a, b, top):
-            high = 1.0
-        else:
-            high = _above(high, rel, tiny, False)
-        out_lo[i] = low if low != low else max(low, -1.0)
-        out_hi[i] = high if high != high else min(high, 1.0)
+        out_lo[i], out_hi[i] = trig_one(lo[i], hi[i], sine, rel, tiny)
     return out_lo, out_hi
 
 
@@ -784,6 +793,20 @@ def point_sin_cos(a: float) -> tuple[float, float, float, float]:  # pragma: no 
 #: the widening of the library functions' results, for compiled code
 _LIB_REL = _rel(_LIB_ULPS)
 _LIB_TINY = _LIB_ULPS * _TINY
+
+
+@kernel(inline=True)
+def interval_cos(a: float, b: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    """One element of :func:`cos`: the bounds of the cosine over ``[a, b]``, for
+    compiled code (the same floats)."""
+    return trig_one(a, b, False, _LIB_REL, _LIB_TINY)
+
+
+@kernel(inline=True)
+def interval_sin(a: float, b: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    """One element of :func:`sin`: the bounds of the sine over ``[a, b]``, for
+    compiled code (the same floats)."""
+    return trig_one(a, b, True, _LIB_REL, _LIB_TINY)
 
 
 # one-element steps of the Interval operations, for the compiled code of the

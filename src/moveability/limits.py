@@ -79,10 +79,8 @@ class JointLimit:
         if self.periodic:
             return np.full(angles.lo.shape, INSIDE, dtype=np.uint8)
         if self.prismatic:
-            out = np.full(angles.lo.shape, STRADDLES, dtype=np.uint8)
-            out[(angles.lo >= self.lo) & (angles.hi <= self.hi)] = INSIDE
-            out[(angles.hi < self.lo) | (angles.lo > self.hi)] = OUTSIDE
-            return out
+            shape, (a_lo, a_hi) = flat_arrays(angles.lo, angles.hi)
+            return _classify_stroke(a_lo, a_hi, float(self.lo), float(self.hi)).reshape(shape)
         return classify_angles(angles, self.lo, self.hi)
 
     def pieces(
@@ -172,6 +170,24 @@ def classify_angles(angles: Interval, lo: ArrayLike, hi: ArrayLike) -> NDArray[n
     with np.errstate(over="ignore", invalid="ignore"):
         shape, flat = flat_arrays(angles.lo, angles.hi, lo, hi)
         return _classify(*flat).reshape(shape)
+
+
+@kernel
+def _classify_stroke(
+    a_lo: NDArray[np.float64], a_hi: NDArray[np.float64], lo: float, hi: float
+) -> NDArray[np.uint8]:  # pragma: no cover - compiled
+    """:meth:`JointLimit.classify` of a stroke ``[lo, hi]``, flat arrays: ``INSIDE``
+    where ``lo <= a_lo`` and ``a_hi <= hi``, then ``OUTSIDE`` where ``a_hi < lo``
+    or ``a_lo > hi``, ``STRADDLES`` elsewhere (NaN bounds included)."""
+    out = np.empty(a_lo.size, dtype=np.uint8)
+    for i in range(a_lo.size):
+        if a_hi[i] < lo or a_lo[i] > hi:
+            out[i] = OUTSIDE
+        elif a_lo[i] >= lo and a_hi[i] <= hi:
+            out[i] = INSIDE
+        else:
+            out[i] = STRADDLES
+    return out
 
 
 @kernel

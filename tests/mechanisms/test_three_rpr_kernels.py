@@ -21,9 +21,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from moveability import intervals as iv
 from moveability.intervals import Interval
 from moveability.limits import JointLimit
 from moveability.mechanisms import ThreeRPR
+from moveability.mechanisms import _rpr_kernels as kernels
 from moveability.mechanisms.constraints import Constraints
 
 DESIGNS = [
@@ -112,6 +114,17 @@ def _assert_all_same(mechanism: ThreeRPR, lo: np.ndarray, hi: np.ndarray) -> Non
                     _assert_same(x, y)
             for x, y in zip(along_q, ref_q, strict=True):
                 _assert_same(x, y)
+        # the reaches and det A in one pass (the sheets' classification)
+        reaches, det = mechanism.reaches_and_det(lo, hi)
+        assert det is not None
+        _assert_same(det, mechanism._det_a_boxes_intervals(lo, hi, angles))
+        for leg, fused in zip(mechanism.rpr_legs, reaches, strict=True):
+            length = leg._length_intervals(lo, hi)
+            _assert_same(fused.hull, length)
+            assert len(fused.branches) == 1
+            _assert_same(fused.branches[0], length)
+            np.testing.assert_array_equal(fused.status, np.where(length.lo > 0, 1, 4))
+            assert not fused.fold_connected.any()
         for leg in mechanism.rpr_legs:
             reach = leg.reach(lo, hi)
             length = leg._length_intervals(lo, hi)
@@ -136,6 +149,30 @@ def test_kernels_give_the_interval_bounds_bit_for_bit(design):
     # 2999 boxes: eleven full chunks and a tail
     lo, hi = _boxes(mechanism, 2999, seed=design)
     _assert_all_same(mechanism, lo, hi)
+
+
+def test_kernels_take_the_cosine_and_sine_given_or_compute_them():
+    """With ``trig`` (4, n) given (``intervals.cos`` and ``sin`` of phi) or none
+    (4, 0): the kernels compute the same bounds box by box."""
+    mechanism = _mechanism(DESIGNS[2])
+    lo, hi = _boxes(mechanism, 777, seed=5)
+    c, s = iv.cos(Interval(lo[:, 2], hi[:, 2])), iv.sin(Interval(lo[:, 2], hi[:, 2]))
+    trig = np.stack([c.lo, c.hi, s.lo, s.hi])
+    legs = mechanism._leg_geometry
+    for cos_sin in (trig, kernels.NO_TRIG):
+        out = np.empty((2, 777))
+        kernels.det_a_bounds(lo, hi, cos_sin, legs, out[0], out[1])
+        rows = np.empty((2, 3 * kernels.ROW_ITEMS, 777))
+        kernels.row_bounds(lo, hi, cos_sin, legs, rows[0], rows[1])
+        length = np.empty((2, 777))
+        kernels.reach_bounds(lo, hi, cos_sin, legs[1], length[0], length[1])
+        grad = np.empty((2, 3, 777))
+        kernels.joint_gradient_bounds(lo, hi, cos_sin, legs[2], length[0], length[1], *grad)
+        if cos_sin is trig:
+            first = (out, rows, length, grad)
+        else:
+            for new, old in zip((out, rows, length, grad), first, strict=True):
+                np.testing.assert_array_equal(_bits(new), _bits(old))
 
 
 @pytest.mark.parametrize("n", [0, 1, 255, 256, 257])

@@ -106,21 +106,56 @@ class SheetTable:
 
     def statuses(self) -> NDArray[np.uint8]:
         """A tree status per box: OUT where no sheet holds a valid configuration, IN
-        where every sheet is decided, BOUNDARY elsewhere."""
-        dead = (self.status == OUT).all(axis=1)
-        return np.where(dead, OUT, np.where(self.decided(), IN, BOUNDARY)).astype(np.uint8)
+        where every sheet is decided, BOUNDARY elsewhere.
+
+        Computed once per table (its arrays are not changed in place: a table is
+        rebuilt, by :meth:`take` or :func:`stack_tables`); each call returns a copy."""
+        cached = self.__dict__.get("_statuses")
+        if cached is None:
+            dead = _rows_all(self.status == OUT)
+            cached = np.where(dead, OUT, np.where(self.decided(), IN, BOUNDARY)).astype(np.uint8)
+            # a frozen dataclass: the cache is set past its __setattr__ (not a field)
+            object.__setattr__(self, "_statuses", cached)
+        return np.array(cached)
 
     def decided(self) -> NDArray[np.bool_]:
         """Boxes where no leg folds and every sheet is IN, OUT or identically singular."""
         settled = (self.status != BOUNDARY) | self.singular
-        return ~self.folding.any(axis=1) & settled.all(axis=1)
+        return ~_rows_any(self.folding) & _rows_all(settled)
+
+
+# reductions along the rows of (n, m) tables of few columns (legs, postures): one
+# pass per column (numpy reduces a short axis row by row, several times slower)
+def _rows_any(a: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """``a.any(axis=1)``."""
+    out = np.zeros(a.shape[0], dtype=bool)
+    for j in range(a.shape[1]):
+        out |= a[:, j]
+    return out
+
+
+def _rows_all(a: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """``a.all(axis=1)``."""
+    out = np.ones(a.shape[0], dtype=bool)
+    for j in range(a.shape[1]):
+        out &= a[:, j]
+    return out
+
+
+def _rows_count(a: NDArray[np.bool_]) -> NDArray[np.int64]:
+    """``a.sum(axis=1)``: the True entries of each row."""
+    out = np.zeros(a.shape[0], dtype=np.int64)
+    for j in range(a.shape[1]):
+        out += a[:, j]
+    return out
 
 
 def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
     """Certify the posture sheets of ``mechanism`` over boxes ``[lo, hi]`` (n, k)."""
     legs = mechanism.legs
     n = lo.shape[0]
-    reaches = [leg.reach(lo, hi) for leg in legs]
+    # det A too where it depends on the pose alone (computed with the reaches)
+    reaches, pose_det = mechanism.reaches_and_det(lo, hi)
     leg_status = np.stack([r.status for r in reaches], axis=1).astype(np.uint8)
     postures = mechanism.postures
     n_post = postures.shape[0]
@@ -135,24 +170,33 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
     angles_hi = np.zeros((n, n_post, len(legs)))
 
     singular = np.array([mechanism.identically_singular(p) for p in range(n_post)], dtype=bool)
-    # limits of each leg branch, and of each leg's hull where it folds
-    branch_limits = [
-        [mechanism.limits[i].classify(b) for b in reaches[i].branches] for i in range(len(legs))
-    ]
+    # limits of each leg's hull where it folds, and of each branch (the hull's
+    # codes where a leg's branch is its hull)
     hull_limits = [mechanism.limits[i].classify(reaches[i].hull) for i in range(len(legs))]
+    branch_limits = [
+        [
+            hull_limits[i] if b is reaches[i].hull else mechanism.limits[i].classify(b)
+            for b in reaches[i].branches
+        ]
+        for i in range(len(legs))
+    ]
     folding = (leg_status != REGULAR) & (leg_status != REACH_OUT)
-    any_out = (leg_status == REACH_OUT).any(axis=1)
-    any_unknown = (leg_status == REACH_UNKNOWN).any(axis=1)
-    fold_count = folding.sum(axis=1)
+    any_out = _rows_any(leg_status == REACH_OUT)
+    any_unknown = _rows_any(leg_status == REACH_UNKNOWN)
+    # the legs that fold in some box (a leg that folds in none joins no group)
+    folds = folding.any(axis=0)
+    fold_legs = [i for i in range(len(legs)) if folds[i]]
+    any_fold = _rows_any(folding)
 
     # geometry: the configurations of the folding legs over the box all join
     fold_ok = np.zeros(n, dtype=bool)
-    single = fold_count == 1
-    for i in range(len(legs)):
-        fold_ok |= single & folding[:, i] & reaches[i].fold_connected
-    if len(legs) >= 2:
-        for i in range(len(legs)):
-            for j in range(i + 1, len(legs)):
+    if fold_legs:
+        fold_count = _rows_count(folding)
+        single = fold_count == 1
+        for i in fold_legs:
+            fold_ok |= single & folding[:, i] & reaches[i].fold_connected
+        for i in fold_legs:
+            for j in (j for j in fold_legs if j > i):
                 pair = (fold_count == 2) & folding[:, i] & folding[:, j]
                 pair &= (leg_status[:, i] == FOLD_OUTER) | (leg_status[:, i] == FOLD_INNER)
                 pair &= (leg_status[:, j] == FOLD_OUTER) | (leg_status[:, j] == FOLD_INNER)
@@ -168,17 +212,22 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
             r = reaches[i]
             # a branch's own enclosure where the leg is regular, or folds and the leg
             # encloses each branch there too; else the hull of both
-            regular = leg_status[:, i] == REGULAR
-            if getattr(legs[i], "branches_at_folds", False):
-                regular = regular | (folding[:, i] & (leg_status[:, i] != REACH_UNKNOWN))
-            a = Interval(
-                np.where(regular, r.branches[b].lo, r.hull.lo),
-                np.where(regular, r.branches[b].hi, r.hull.hi),
-            )
+            if r.branches[b] is r.hull:
+                # the leg's branch is its hull: the same enclosure and codes everywhere
+                a = Interval(np.array(r.hull.lo), np.array(r.hull.hi))
+                code = hull_limits[i]
+            else:
+                regular = leg_status[:, i] == REGULAR
+                if getattr(legs[i], "branches_at_folds", False):
+                    regular = regular | (folding[:, i] & (leg_status[:, i] != REACH_UNKNOWN))
+                a = Interval(
+                    np.where(regular, r.branches[b].lo, r.hull.lo),
+                    np.where(regular, r.branches[b].hi, r.hull.hi),
+                )
+                code = np.where(regular, branch_limits[i][b], hull_limits[i])
             angles.append(a)
             angles_lo[:, p, i] = a.lo
             angles_hi[:, p, i] = a.hi
-            code = np.where(regular, branch_limits[i][b], hull_limits[i])
             lim_in &= code == INSIDE
             lim_out |= code == OUTSIDE
         # passive limits, obstacles, collisions: part of what a valid configuration
@@ -190,8 +239,11 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         if beyond is not None:
             lim_in &= beyond == INSIDE
             lim_out |= beyond == OUTSIDE
-        with np.errstate(invalid="ignore"):
-            det = mechanism.det_a_boxes(lo, hi, angles, posture=p)
+        if pose_det is not None:
+            det = pose_det
+        else:
+            with np.errstate(invalid="ignore"):
+                det = mechanism.det_a_boxes(lo, hi, angles, posture=p)
         if signs is not None:
             no_plus, no_minus = signs
             lim_out |= no_plus & no_minus
@@ -203,7 +255,7 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         positive = det.lo > 0
         negative = det.hi < 0
         sign[:, p] = np.where(positive, 1, np.where(negative, -1, 0))
-        all_regular = ~folding.any(axis=1) & ~any_out
+        all_regular = ~any_fold & ~any_out
         exists[:, p] = all_regular
         within[:, p] = lim_in
         dead = any_out | lim_out

@@ -79,6 +79,7 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.intervals._trig_bounds": [(R1, R1, B1, F8, F8)],
     "moveability.intervals.next_below": [(F8,)],
     "moveability.limits._classify": [(R1, R1, R1, R1)],
+    "moveability.limits._classify_stroke": [(R1, R1, F8, F8)],
     "moveability.mechanisms.base._det_bounds": [
         (uniform(n, R1), uniform(n, R1), W1, W1) for n in _DET_ITEMS
     ],
@@ -104,6 +105,7 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         (R2, R2, R2, R1, R1, R1, W2, W2)
     ],
     "moveability.mechanisms._rpr_kernels.reach_bounds": [(R2, R2, R2, R1, W1, W1)],
+    "moveability.mechanisms._rpr_kernels.pose_bounds": [(R2, R2, R2, W2, W2, W1, W1)],
     "moveability.mechanisms._rr_kernels.knee_bounds": [(R1, R1, R1, W2, W2)],
     "moveability.mechanisms._rr_kernels.det_a_bounds": [(R2, R2, R2, R2, R2, array(I8), W1, W1)],
     "moveability.mechanisms._rr_kernels.reach_prepare": [
@@ -122,6 +124,9 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     ],
     "moveability.hypertree._bits.encode": [(array(I8, 2), array(I8, 2), array(I8))],
     "moveability.hypertree._bits.decode": [(array(U8), array(I8, 2), array(I8))],
+    "moveability.hypertree._boxes.cell_boxes": [
+        (array(I8, 2), array("uint8"), array(I8), R1, R1, R1)
+    ],
     "moveability.hypertree._kernels._label": [
         (
             array(U8), array("uint8"), array(B1), array(I8), array(U8), array(I8, 2),

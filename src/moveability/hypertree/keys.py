@@ -112,13 +112,38 @@ class KeyLayout:
 
     def axis_depths(self, levels: NDArray[np.integer]) -> NDArray[np.int64]:
         """Depth ``min(level, max_depth[i])`` of each cell on each axis, shape (n, k)."""
+        by_level = self._per_level(levels, 0)
+        if by_level is not None:
+            return by_level
         lv = np.asarray(levels, dtype=np.int64)[:, None]
         return np.minimum(lv, np.asarray(self.max_depth, dtype=np.int64)[None, :])
 
     def cell_sizes(self, levels: NDArray[np.integer]) -> NDArray[np.int64]:
         """Size of each cell in finest units of each axis, shape (n, k)."""
+        by_level = self._per_level(levels, 1)
+        if by_level is not None:
+            return by_level
         md = np.asarray(self.max_depth, dtype=np.int64)[None, :]
         return np.left_shift(np.int64(1), md - self.axis_depths(levels))
+
+    def _per_level(self, levels: NDArray[np.integer], which: int) -> NDArray[np.int64] | None:
+        """:meth:`axis_depths` (``which`` 0) or :meth:`cell_sizes` (1) of the
+        ``levels`` (n,) of the tree, 0 to ``n_levels``, as rows of a table of one
+        row per level (one gather, not four passes over (n, k) arrays); None for
+        other levels (computed as the formula says)."""
+        lv = np.asarray(levels)
+        if lv.ndim != 1 or lv.dtype.kind not in "ui":
+            return None
+        if lv.size and (int(lv.min()) < 0 or int(lv.max()) > self.n_levels):
+            return None
+        tables = self.__dict__.get("_level_tables")
+        if tables is None:
+            md = np.asarray(self.max_depth, dtype=np.int64)[None, :]
+            depths = np.minimum(np.arange(self.n_levels + 1, dtype=np.int64)[:, None], md)
+            tables = (depths, np.left_shift(np.int64(1), md - depths))
+            # a frozen dataclass: the cache is set past its __setattr__ (not a field)
+            object.__setattr__(self, "_level_tables", tables)
+        return np.take(tables[which], lv, axis=0)
 
     # -------------------------------------------------------- encode / decode
     @property

@@ -8,7 +8,8 @@ rounded outwards by the compiled primitives of :mod:`moveability.intervals`
 that the Interval operators apply element by element (``mul_into``,
 ``add_into``, ``sub_into``, ``interval_mul``, ``interval_sub``, ``next_below``
 and ``point_sin_cos``; the cosine and sine of the boxes' phi come from
-``intervals.cos`` and ``sin``, one compiled pass each). The bounds are
+``intervals.cos`` and ``sin``, one compiled pass each, or element by element
+in :func:`pose_bounds`: ``interval_cos``, ``interval_sin``). The bounds are
 thus the same floats, bit for bit (tests/mechanisms/test_three_rpr_kernels.py
 compares them on random boxes of every kind), computed chunk by chunk in
 scratch that stays in cache, with no array allocated per operation and no
@@ -17,16 +18,22 @@ Python between the operations.
 A leg enters as ``(A_x, A_y, b_x, b_y)``: its base joint and its platform joint
 in the platform frame. Boxes of poses are (n, 3) C-contiguous arrays ``lo``,
 ``hi`` of ``(x, y, phi)``, with ``trig`` (4, n): the bounds of the cosine of
-their phi, then of its sine (``intervals.cos`` and ``sin``).
+their phi, then of its sine (``intervals.cos`` and ``sin``), or (4, 0)
+(:data:`NO_TRIG`): the kernel computes them itself, box by box (the same
+floats), as :func:`pose_bounds` always does.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..compiled import kernel
 from ..intervals import (
     Slot,
+    interval_cos,
+    interval_mul,
+    interval_sin,
     next_below,
     point_sin_cos,
     reciprocal,
@@ -40,7 +47,13 @@ from ..intervals import (
 )
 from ..types import Array
 
-__all__ = ["det_a_bounds", "joint_gradient_bounds", "reach_bounds", "row_bounds"]
+__all__ = [
+    "det_a_bounds",
+    "joint_gradient_bounds",
+    "pose_bounds",
+    "reach_bounds",
+    "row_bounds",
+]
 
 
 #: the entries of one leg in :func:`row_bounds`: the row (dx, dy, turn), then
@@ -90,14 +103,26 @@ def _load(
     c: Slot,
 ) -> None:  # pragma: no cover - compiled
     """The boxes ``s:s + w``: their coordinates into slots ``x``, ``x + 1``, ``x +
-    2``, the cosine and sine of their phi (``trig``: (4, n), the bounds of the
-    cosine then of the sine) into slots ``c``, ``c + 1``."""
+    2``, the cosine and sine of their phi into slots ``c``, ``c + 1``: from
+    ``trig`` ((4, n): the bounds of the cosine then of the sine), or computed here
+    when ``trig`` holds no column ((4, 0): ``interval_cos`` and ``interval_sin``,
+    the elements of ``intervals.cos`` and ``sin``)."""
+    given = trig.shape[1] > 0
     for j in range(w):
         for axis in range(3):
             lo[x + axis, j] = box_lo[s + j, axis]
             hi[x + axis, j] = box_hi[s + j, axis]
-        lo[c, j], hi[c, j] = trig[0, s + j], trig[1, s + j]
-        lo[c + 1, j], hi[c + 1, j] = trig[2, s + j], trig[3, s + j]
+        if given:
+            lo[c, j], hi[c, j] = trig[0, s + j], trig[1, s + j]
+            lo[c + 1, j], hi[c + 1, j] = trig[2, s + j], trig[3, s + j]
+        else:
+            a, b = box_lo[s + j, 2], box_hi[s + j, 2]
+            lo[c, j], hi[c, j] = interval_cos(a, b)
+            lo[c + 1, j], hi[c + 1, j] = interval_sin(a, b)
+
+
+#: the ``trig`` of the kernels that compute the cosine and sine themselves
+NO_TRIG = np.empty((4, 0))
 
 
 #: the ``partials`` of :func:`_leg`: none; none and no turn either
@@ -156,6 +181,82 @@ def _leg(
     slot_negate(lo, hi, partials + 2, partials + 2, w)
 
 
+@kernel
+def _length(
+    s_lo: Array,
+    s_hi: Array,
+    row: Slot,
+    sq: Slot,
+    s: int,
+    size: int,
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """The length ``sqrt(dx^2 + dy^2)`` of a leg whose ``dx, dy`` are in slots ``row,
+    row + 1``, into ``out[s:s + size]``, as ``intervals.square`` and ``sqrt`` give
+    it (slots ``sq, sq + 1`` are scratch)."""
+    # squares: x * x, from 0 where x straddles 0
+    for e in range(2):
+        slot_mul(s_lo, s_hi, row + e, row + e, sq + e, size)
+        for j in range(size):
+            straddles = s_lo[row + e, j] <= 0 and s_hi[row + e, j] >= 0
+            s_lo[sq + e, j] = 0.0 if straddles else _max(s_lo[sq + e, j], 0.0)
+    slot_add(s_lo, s_hi, sq, sq + 1, sq, size)
+    for j in range(size):
+        # the square root of the non-negative part; NaN above where there is none
+        r_lo, r_hi = s_lo[sq, j], s_hi[sq, j]
+        low = 0.0 if r_lo <= 0 else next_below(np.sqrt(_max(r_lo, 0.0)))
+        high = np.nan if r_hi < 0 else _up(np.sqrt(_max(r_hi, 0.0)))
+        out_lo[s + j] = _max(low, 0.0)
+        out_hi[s + j] = high
+
+
+@kernel
+def _mul_known(
+    lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int, one: Slot, zero: Slot
+) -> None:  # pragma: no cover - compiled
+    """``slot_mul`` where a factor may be the constant slot ``one`` ([1, 1]) or
+    ``zero`` ([0, 0]): a product with ``[0, 0]`` is ``[0.0, 0.0]`` whatever the
+    other factor (each bound product is a zero, or NaN taken as 0; none is an
+    underflow), and one with ``[1, 1]`` is ``interval_mul`` with the constant
+    known (its products exact): the floats of ``slot_mul``, with less work."""
+    if a == zero or b == zero:
+        for j in range(w):
+            lo[o, j] = 0.0
+            hi[o, j] = 0.0
+    elif a == one:
+        for j in range(w):
+            lo[o, j], hi[o, j] = interval_mul(1.0, 1.0, lo[b, j], hi[b, j])
+    elif b == one:
+        for j in range(w):
+            lo[o, j], hi[o, j] = interval_mul(lo[a, j], hi[a, j], 1.0, 1.0)
+    else:
+        slot_mul(lo, hi, a, b, o, w)
+
+
+@kernel
+def _det3_known(
+    lo: Array, hi: Array, m: NDArray[np.int64], o: Slot, t: Slot, w: int, one: Slot, zero: Slot
+) -> None:  # pragma: no cover - compiled
+    """``intervals.slot_det3`` (the same steps) with its products by
+    :func:`_mul_known`, for matrices holding the slots ``one`` and ``zero``."""
+    p, q = t, t + 1
+    _mul_known(lo, hi, m[4], m[8], p, w, one, zero)
+    _mul_known(lo, hi, m[5], m[7], q, w, one, zero)
+    slot_sub(lo, hi, p, q, p, w)
+    _mul_known(lo, hi, m[0], p, o, w, one, zero)
+    _mul_known(lo, hi, m[3], m[8], p, w, one, zero)
+    _mul_known(lo, hi, m[5], m[6], q, w, one, zero)
+    slot_sub(lo, hi, p, q, p, w)
+    _mul_known(lo, hi, m[1], p, q, w, one, zero)
+    slot_sub(lo, hi, o, q, o, w)
+    _mul_known(lo, hi, m[3], m[7], p, w, one, zero)
+    _mul_known(lo, hi, m[4], m[6], q, w, one, zero)
+    slot_sub(lo, hi, p, q, p, w)
+    _mul_known(lo, hi, m[2], p, q, w, one, zero)
+    slot_add(lo, hi, o, q, o, w)
+
+
 # the slots of det_a_bounds
 _X, _C, _MX, _MC = 0, 3, 5, 8  # box (x, y, phi), its cos, sin; the same at the centre
 _ROWS, _MROWS, _PARTS = 10, 19, 28  # leg k's row at + 3 k; its partials at _PARTS + 3 k
@@ -163,6 +264,82 @@ _ONE, _ZERO = 37, 38
 _NAT, _TOT, _SUM, _TERM, _WIDTH = 39, 40, 41, 42, 43
 _TEMP = 44  # 6 slots of scratch
 _SLOTS = 50
+
+
+@kernel
+def _rows(
+    s_lo: Array,
+    s_hi: Array,
+    lo: Array,
+    hi: Array,
+    s: int,
+    size: int,
+    legs: Array,
+    rows: NDArray[np.int64],
+    centre: NDArray[np.int64],
+) -> None:  # pragma: no cover - compiled
+    """For :func:`det_a_bounds`, from the chunk's boxes ``s:s + size`` loaded (with
+    their cosine and sine): the centres and their cosine and sine, then each leg's
+    row and partials over the box, and its row at the centre."""
+    x, c, mx, mc, temp = np.int64(_X), np.int64(_C), np.int64(_MX), np.int64(_MC), np.int64(_TEMP)
+    for j in range(size):
+        for axis in range(3):
+            # as numpy rounds 0.5 * (lo + hi)
+            m = 0.5 * (lo[s + j, axis] + hi[s + j, axis])
+            s_lo[mx + axis, j] = m
+            s_hi[mx + axis, j] = m
+        # the sine, then the cosine, of [m, m]
+        sl, sh, cl, ch = point_sin_cos(s_lo[mx + 2, j])
+        s_lo[mc, j], s_hi[mc, j], s_lo[mc + 1, j], s_hi[mc + 1, j] = cl, ch, sl, sh
+    for k in range(3):
+        part = np.int64(_PARTS) + 3 * k
+        _leg(s_lo, s_hi, x, c, legs[k], rows[3 * k], part, temp, size)
+        _leg(s_lo, s_hi, mx, mc, legs[k], centre[3 * k], np.int64(_NONE), temp, size)
+
+
+@kernel
+def _det(
+    s_lo: Array,
+    s_hi: Array,
+    s: int,
+    size: int,
+    rows: NDArray[np.int64],
+    centre: NDArray[np.int64],
+    matrix: NDArray[np.int64],
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """For :func:`det_a_bounds`, from the slots :func:`_rows` fills: det A over the
+    chunk's boxes into ``out[s:s + size]``."""
+    x, mx, one, zero = np.int64(_X), np.int64(_MX), np.int64(_ONE), np.int64(_ZERO)
+    nat, tot, total = np.int64(_NAT), np.int64(_TOT), np.int64(_SUM)
+    term, width, temp = np.int64(_TERM), np.int64(_WIDTH), np.int64(_TEMP)
+    slot_det3(s_lo, s_hi, rows, nat, temp, size)
+    slot_det3(s_lo, s_hi, centre, tot, temp, size)
+    for axis in range(3):
+        for k in range(3):
+            # the rows with leg k's differentiated along the axis: along x
+            # (1, 0, -rby), along y (0, 1, rbx), along phi (-rby, rbx, spin)
+            matrix[:] = rows
+            part = np.int64(_PARTS) + 3 * k
+            if axis == 0:
+                matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = one, zero, part
+            elif axis == 1:
+                matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = zero, one, part + 1
+            else:
+                matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = part, part + 1, part + 2
+            if k == 0:
+                _det3_known(s_lo, s_hi, matrix, total, temp, size, one, zero)
+            else:
+                _det3_known(s_lo, s_hi, matrix, term, temp, size, one, zero)
+                slot_add(s_lo, s_hi, total, term, total, size)
+        # + dD/dx_j * (x_j - c_j)
+        slot_sub(s_lo, s_hi, x + axis, mx + axis, width, size)
+        slot_mul(s_lo, s_hi, total, width, term, size)
+        slot_add(s_lo, s_hi, tot, term, tot, size)
+    for j in range(size):
+        out_lo[s + j] = _max(s_lo[nat, j], s_lo[tot, j])
+        out_hi[s + j] = _min(s_hi[nat, j], s_hi[tot, j])
 
 
 @kernel
@@ -180,55 +357,48 @@ def det_a_bounds(
     s_lo[_ONE], s_hi[_ONE] = 1.0, 1.0
     s_lo[_ZERO], s_hi[_ZERO] = 0.0, 0.0
     # the slots as run-time integers (see Slot)
-    x, c, mx, mc = np.int64(_X), np.int64(_C), np.int64(_MX), np.int64(_MC)
-    one, zero, nat, tot = np.int64(_ONE), np.int64(_ZERO), np.int64(_NAT), np.int64(_TOT)
-    total, term, width, temp = np.int64(_SUM), np.int64(_TERM), np.int64(_WIDTH), np.int64(_TEMP)
     rows = np.arange(_ROWS, _ROWS + 9, dtype=np.int64)
     centre = np.arange(_MROWS, _MROWS + 9, dtype=np.int64)
     matrix = np.empty(9, dtype=np.int64)
     n = lo.shape[0]
     for s in range(0, n, w):
         size = min(w, n - s)
-        _load(s_lo, s_hi, lo, hi, trig, s, size, x, c)
-        for j in range(size):
-            for axis in range(3):
-                # as numpy rounds 0.5 * (lo + hi)
-                m = 0.5 * (lo[s + j, axis] + hi[s + j, axis])
-                s_lo[mx + axis, j] = m
-                s_hi[mx + axis, j] = m
-            # the sine, then the cosine, of [m, m]
-            sl, sh, cl, ch = point_sin_cos(s_lo[mx + 2, j])
-            s_lo[mc, j], s_hi[mc, j], s_lo[mc + 1, j], s_hi[mc + 1, j] = cl, ch, sl, sh
+        _load(s_lo, s_hi, lo, hi, trig, s, size, np.int64(_X), np.int64(_C))
+        _rows(s_lo, s_hi, lo, hi, s, size, legs, rows, centre)
+        _det(s_lo, s_hi, s, size, rows, centre, matrix, out_lo, out_hi)
+
+
+@kernel
+def pose_bounds(
+    lo: Array,
+    hi: Array,
+    legs: Array,
+    len_lo: Array,
+    len_hi: Array,
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """:func:`reach_bounds` of the three legs into ``len`` (3, n) and
+    :func:`det_a_bounds` into ``out`` (n,) in one pass over the (n, 3) boxes: the
+    cosine and sine of their phi computed once (``intervals.cos`` and ``sin``
+    element by element), the legs' ``dx, dy`` (the first entries of their rows)
+    shared. The same floats as those kernels, bit for bit."""
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_SLOTS, w)), np.empty((_SLOTS, w))
+    s_lo[_ONE], s_hi[_ONE] = 1.0, 1.0
+    s_lo[_ZERO], s_hi[_ZERO] = 0.0, 0.0
+    rows = np.arange(_ROWS, _ROWS + 9, dtype=np.int64)
+    centre = np.arange(_MROWS, _MROWS + 9, dtype=np.int64)
+    matrix = np.empty(9, dtype=np.int64)
+    x, c, temp = np.int64(_X), np.int64(_C), np.int64(_TEMP)
+    n = lo.shape[0]
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        _load(s_lo, s_hi, lo, hi, np.empty((4, 0)), s, size, x, c)
+        _rows(s_lo, s_hi, lo, hi, s, size, legs, rows, centre)
         for k in range(3):
-            part = np.int64(_PARTS) + 3 * k
-            _leg(s_lo, s_hi, x, c, legs[k], rows[3 * k], part, temp, size)
-            _leg(s_lo, s_hi, mx, mc, legs[k], centre[3 * k], np.int64(_NONE), temp, size)
-        slot_det3(s_lo, s_hi, rows, nat, temp, size)
-        slot_det3(s_lo, s_hi, centre, tot, temp, size)
-        for axis in range(3):
-            for k in range(3):
-                # the rows with leg k's differentiated along the axis: along x
-                # (1, 0, -rby), along y (0, 1, rbx), along phi (-rby, rbx, spin)
-                matrix[:] = rows
-                part = np.int64(_PARTS) + 3 * k
-                if axis == 0:
-                    matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = one, zero, part
-                elif axis == 1:
-                    matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = zero, one, part + 1
-                else:
-                    matrix[3 * k], matrix[3 * k + 1], matrix[3 * k + 2] = part, part + 1, part + 2
-                if k == 0:
-                    slot_det3(s_lo, s_hi, matrix, total, temp, size)
-                else:
-                    slot_det3(s_lo, s_hi, matrix, term, temp, size)
-                    slot_add(s_lo, s_hi, total, term, total, size)
-            # + dD/dx_j * (x_j - c_j)
-            slot_sub(s_lo, s_hi, x + axis, mx + axis, width, size)
-            slot_mul(s_lo, s_hi, total, width, term, size)
-            slot_add(s_lo, s_hi, tot, term, tot, size)
-        for j in range(size):
-            out_lo[s + j] = _max(s_lo[nat, j], s_lo[tot, j])
-            out_hi[s + j] = _min(s_hi[nat, j], s_hi[tot, j])
+            _length(s_lo, s_hi, rows[3 * k], temp, s, size, len_lo[k], len_hi[k])
+        _det(s_lo, s_hi, s, size, rows, centre, matrix, out_lo, out_hi)
 
 
 @kernel
@@ -308,17 +478,4 @@ def reach_bounds(
         size = min(w, n - s)
         _load(s_lo, s_hi, lo, hi, trig, s, size, x, c)
         _leg(s_lo, s_hi, x, c, leg, row, np.int64(_TARGET), temp, size)
-        # squares: x * x, from 0 where x straddles 0
-        for e in range(2):
-            slot_mul(s_lo, s_hi, row + e, row + e, sq + e, size)
-            for j in range(size):
-                straddles = s_lo[row + e, j] <= 0 and s_hi[row + e, j] >= 0
-                s_lo[sq + e, j] = 0.0 if straddles else _max(s_lo[sq + e, j], 0.0)
-        slot_add(s_lo, s_hi, sq, sq + 1, sq, size)
-        for j in range(size):
-            # the square root of the non-negative part; NaN above where there is none
-            r_lo, r_hi = s_lo[sq, j], s_hi[sq, j]
-            low = 0.0 if r_lo <= 0 else next_below(np.sqrt(_max(r_lo, 0.0)))
-            high = np.nan if r_hi < 0 else _up(np.sqrt(_max(r_hi, 0.0)))
-            out_lo[s + j] = _max(low, 0.0)
-            out_hi[s + j] = high
+        _length(s_lo, s_hi, row, sq, s, size, out_lo, out_hi)

@@ -609,6 +609,13 @@ class Mechanism:
         rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.legs)]
         return interval_det(rows)
 
+    def reaches_and_det(self, lo: Array, hi: Array) -> tuple[list[LegReach], Interval | None]:
+        """Each leg's reach over boxes of poses and, for a mechanism whose det A
+        depends on the pose alone (whatever the posture and the joint angles), its
+        enclosure as :meth:`det_a_boxes` gives it, computed together. Here each
+        leg's ``reach`` and None: det A comes from :meth:`det_a_boxes` per posture."""
+        return [leg.reach(lo, hi) for leg in self.legs], None
+
     def identically_singular(self, posture: int) -> bool:
         """Whether det A vanishes on every configuration of a posture (it then holds
         no configuration of any region). Mechanisms that know such postures say so."""

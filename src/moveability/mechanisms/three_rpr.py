@@ -67,15 +67,26 @@ def _trig(lo: Array, hi: Array) -> tuple[Interval, Interval]:
 
 def _pose_boxes(lo: Array, hi: Array) -> tuple[Array, Array, Array] | None:
     """The boxes as the compiled kernels take them: (n, 3) contiguous float arrays
-    (the first three columns) and the bounds of the cosine and sine of their phi
-    (4, n); None when they are not (n, k >= 3) arrays."""
+    (the first three columns) and :data:`._rpr_kernels.NO_TRIG` (the kernels
+    compute the bounds of the cosine and sine of phi box by box); None when they
+    are not (n, k >= 3) arrays."""
     lo_a = np.asarray(lo, dtype=np.float64)
     hi_a = np.asarray(hi, dtype=np.float64)
     if lo_a.ndim != 2 or lo_a.shape[1] < 3 or hi_a.shape != lo_a.shape:
         return None
     lo_a, hi_a = np.ascontiguousarray(lo_a[:, :3]), np.ascontiguousarray(hi_a[:, :3])
-    c, s = _trig(lo_a, hi_a)
-    return lo_a, hi_a, np.stack([c.lo, c.hi, s.lo, s.hi])
+    return lo_a, hi_a, kernels.NO_TRIG
+
+
+def _length_reach(rho: Interval) -> LegReach:
+    """A leg's reach from the enclosure of its length: REGULAR where it certainly
+    does not vanish."""
+    return LegReach(
+        status=np.where(rho.lo > 0, REGULAR, REACH_UNKNOWN).astype(np.uint8),
+        branches=[rho],
+        hull=rho,
+        fold_connected=np.zeros(rho.lo.shape[0], dtype=bool),
+    )
 
 
 def _leg_geometry(base: tuple[float, float], platform: tuple[float, float]) -> Array:
@@ -239,13 +250,7 @@ class RPRLeg:
             r_lo, r_hi = np.empty(n), np.empty(n)
             kernels.reach_bounds(*boxes, _leg_geometry(self.base, self.platform), r_lo, r_hi)
             rho = Interval(r_lo, r_hi)
-        status = np.where(rho.lo > 0, REGULAR, REACH_UNKNOWN).astype(np.uint8)
-        return LegReach(
-            status=status,
-            branches=[rho],
-            hull=rho,
-            fold_connected=np.zeros(lo.shape[0], dtype=bool),
-        )
+        return _length_reach(rho)
 
     def _length_intervals(self, lo: Array, hi: Array) -> Interval:
         """The enclosure of the length over boxes by :class:`Interval` operations
@@ -368,15 +373,48 @@ class ThreeRPR(Mechanism):
         kernels.det_a_bounds(*boxes, self._leg_geometry, out_lo, out_hi)
         return Interval(out_lo, out_hi)
 
+    def reaches_and_det(self, lo: Array, hi: Array) -> tuple[list[LegReach], Interval | None]:
+        """The legs' reaches and det A over boxes (det A depends on the pose alone) in
+        one compiled pass (:func:`._rpr_kernels.pose_bounds`: the cosine and sine of
+        phi once for all): the bounds of :meth:`RPRLeg.reach` and :meth:`det_a_boxes`,
+        bit for bit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from moveability.limits import JointLimit
+        >>> stroke = JointLimit(10.0, 25.0, prismatic=True)
+        >>> m = ThreeRPR([[0, 0], [15.91, 0], [0, 10]], [[0, 0], [17.04, 0], [13.24, 16.1]],
+        ...              (stroke, stroke, stroke))
+        >>> lo, hi = np.array([[5.0, 8.0, 0.2]]), np.array([[5.5, 8.5, 0.25]])
+        >>> reaches, det = m.reaches_and_det(lo, hi)
+        >>> alone = m.det_a_boxes(lo, hi, [])
+        >>> bool(det.lo[0] == alone.lo[0] and det.hi[0] == alone.hi[0])
+        True
+        >>> bool(reaches[1].hull.lo[0] == m.legs[1].reach(lo, hi).hull.lo[0])
+        True
+        """
+        boxes = _pose_boxes(lo, hi)
+        fused = type(self).det_a_boxes is ThreeRPR.det_a_boxes and all(
+            type(leg).reach is RPRLeg.reach for leg in self.legs
+        )
+        if boxes is None or not fused:
+            return super().reaches_and_det(lo, hi)
+        lo_a, hi_a, _ = boxes
+        n = lo_a.shape[0]
+        len_lo, len_hi = np.empty((3, n)), np.empty((3, n))
+        det_lo, det_hi = np.empty(n), np.empty(n)
+        kernels.pose_bounds(lo_a, hi_a, self._leg_geometry, len_lo, len_hi, det_lo, det_hi)
+        reaches = [_length_reach(Interval(len_lo[k], len_hi[k])) for k in range(3)]
+        return reaches, Interval(det_lo, det_hi)
+
     def _det_a_boxes_intervals(
         self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
     ) -> Interval:
         """:meth:`det_a_boxes` by :class:`Interval` operations (the reference)."""
         # the legs share the cosine and sine of phi
         trig = _trig(lo, hi)
-        rows = [
-            leg.a_row_boxes(lo, hi, angles[i], trig) for i, leg in enumerate(self.rpr_legs)
-        ]
+        rows = [leg.a_row_boxes(lo, hi, angles[i], trig) for i, leg in enumerate(self.rpr_legs)]
         natural = interval_det(rows)
         mid = 0.5 * (lo + hi)
         trig_mid = _trig(mid, mid)
