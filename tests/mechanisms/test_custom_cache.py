@@ -95,11 +95,11 @@ def test_other_numbers_need_no_sympy(cache) -> None:
 def test_numbers_are_checked_when_the_names_are_cached(cache) -> None:
     data = dict(load_spec(SPEC))
     CustomMechanism(data)
-    with pytest.raises(SpecError, match="bounds.x"):
+    with pytest.raises(SpecError, match=r"bounds\.x"):
         CustomMechanism({**data, "bounds": {"x": [3.0, 1.0], "y": [0.0, 1.0]}})
-    with pytest.raises(SpecError, match="limits.t2"):
+    with pytest.raises(SpecError, match=r"limits\.t2"):
         CustomMechanism({**data, "limits": {"t1": [0.0, 1.0]}})
-    with pytest.raises(SpecError, match="parameters.L2"):
+    with pytest.raises(SpecError, match=r"parameters\.L2"):
         CustomMechanism({**data, "parameters": {**data["parameters"], "L2": float("nan")}})
 
 
