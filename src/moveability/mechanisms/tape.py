@@ -942,19 +942,28 @@ def pose_values(prog: Program, lo: Array, hi: Array) -> tuple[Array, Array, Arra
     lo_c = np.ascontiguousarray(lo, dtype=np.float64)
     hi_c = np.ascontiguousarray(hi, dtype=np.float64)
     centre = 0.5 * (lo_c + hi_c)
+    box = pose_box_values(prog, lo, hi)
     with np.errstate(all="ignore"):
-        memo = _ROWS.get()
-        if memo is None:
-            box = _pose_derived_values(prog.pose_derived, lo_c, hi_c)
-        else:
-            rows = [_rows_values(memo, f, a, lo, hi, lo_c, hi_c) for f, a in prog.pose_derived]
-            box = (
-                np.array([r[0] for r in rows]).reshape(-1, lo_c.shape[0]),
-                np.array([r[1] for r in rows]).reshape(-1, lo_c.shape[0]),
-            )
         # (the centres as points: one sine and one cosine each, the same bounds)
         mid = _values(prog.pose_derived, _Coords(centre, centre, True))
     return box[0], box[1], mid[0], mid[1]
+
+
+def pose_box_values(prog: Program, lo: Array, hi: Array) -> tuple[Array, Array]:
+    """The first two arrays of :func:`pose_values`: the derived inputs of pose
+    coordinates of ``prog`` over each box ``[lo, hi]``, shape ``(d, n)``
+    (remembered within :func:`remembered_boxes`)."""
+    lo_c = np.ascontiguousarray(lo, dtype=np.float64)
+    hi_c = np.ascontiguousarray(hi, dtype=np.float64)
+    with np.errstate(all="ignore"):
+        memo = _ROWS.get()
+        if memo is None:
+            return _pose_derived_values(prog.pose_derived, lo_c, hi_c)
+        rows = [_rows_values(memo, f, a, lo, hi, lo_c, hi_c) for f, a in prog.pose_derived]
+    return (
+        np.array([r[0] for r in rows]).reshape(-1, lo_c.shape[0]),
+        np.array([r[1] for r in rows]).reshape(-1, lo_c.shape[0]),
+    )
 
 
 @kernel(inline=True)
