@@ -201,6 +201,14 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.mechanisms._delta_kernels.mean_value_bounds": [
         (R2, R2, array(F8, 3), array(I8), array(F8, 4), R2, W1, W1)
     ],
+    "moveability.mechanisms._fold_kernels._fold": [
+        (
+            array(I8, 2), R1, R1, I8, I8, array(I8), I8, uniform(8, array(I8, 2)),
+            uniform(4, array(I8)), R1, I8, I8, I8, R2, R2, array(I8), array(I8), R1, R1, R1,
+            array(B1), R2, R2, R2, R2, R2, R2, array(F8, 3), array(F8, 3), array(F8, 3),
+            array(F8, 3), array(F8, 3), array(F8, 3),
+        )
+    ],
 }
 
 

@@ -79,6 +79,95 @@ def _nan_min(m: float, x: float) -> float:  # pragma: no cover - compiled
     return m
 
 
+@kernel(inline=True)
+def _contexts(
+    code: NDArray[np.int64],
+    needed: NDArray[np.int64],
+    r_lo: Array,
+    r_hi: Array,
+    k: int,
+    first_pose: int,
+    x_lo: Array,
+    x_hi: Array,
+    d_lo: Array,
+    d_hi: Array,
+    use: NDArray[np.bool_],
+    idx: NDArray[np.int64],
+    pv_lo: Array,
+    pv_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """The operations ``code`` on the pose alone over each context ``c`` with
+    ``use[c]``: pose ``[x_lo[c], x_hi[c]]``, its derived inputs ``d[:, c]``; the
+    slots ``needed`` into ``pv[:, c]``."""
+    n = x_lo.shape[0]
+    block = r_lo.shape[1]
+    c = 0
+    while c < n:
+        m = 0
+        while c < n and m < block:
+            if use[c]:
+                for j in range(k):
+                    r_lo[j, m] = x_lo[c, j]
+                    r_hi[j, m] = x_hi[c, j]
+                _put(r_lo, r_hi, m, first_pose, d_lo, d_hi, c)
+                idx[m] = c
+                m += 1
+            c += 1
+        if m == 0:
+            continue
+        _ops(code, r_lo, r_hi, m)
+        for e in range(m):
+            for s in range(needed.size):
+                pv_lo[s, idx[e]] = r_lo[needed[s], e]
+                pv_hi[s, idx[e]] = r_hi[needed[s], e]
+
+
+@kernel(inline=True)
+def _fill(
+    r_lo: Array,
+    r_hi: Array,
+    e: int,
+    needed: NDArray[np.int64],
+    pv_lo: Array,
+    pv_hi: Array,
+    ctx: int,
+    k: int,
+    a: float,
+    z: float,
+    qd_lo: Array,
+    qd_hi: Array,
+    t: int,
+) -> None:  # pragma: no cover - compiled
+    """Column ``e``: the pose slots ``needed`` of context ``ctx``, the joint
+    ``[a, z]`` and its derived inputs ``qd[:, t]``."""
+    for s in range(needed.size):
+        r_lo[needed[s], e] = pv_lo[s, ctx]
+        r_hi[needed[s], e] = pv_hi[s, ctx]
+    r_lo[k, e] = a
+    r_hi[k, e] = z
+    _put(r_lo, r_hi, e, k + 1, qd_lo, qd_hi, t)
+
+
+@kernel(inline=True)
+def _corner(
+    lo: Array, hi: Array, corner: NDArray[np.int64], out: Array
+) -> None:  # pragma: no cover
+    """The corner ``corner[i]`` of each box ``i`` (bit ``j``: the upper end of axis ``j``)."""
+    for i in range(lo.shape[0]):
+        for j in range(lo.shape[1]):
+            out[i, j] = hi[i, j] if (corner[i] >> j) & 1 else lo[i, j]
+
+
+@kernel(inline=True)
+def _at_corner(
+    cd: Array, corner: NDArray[np.int64], out: Array
+) -> None:  # pragma: no cover - compiled
+    """``out[x, i] = cd[corner[i], x, i]``."""
+    for x in range(cd.shape[1]):
+        for i in range(cd.shape[2]):
+            out[x, i] = cd[corner[i], x, i]
+
+
 @kernel
 def _fold(
     code: NDArray[np.int64],
@@ -86,10 +175,10 @@ def _fold(
     const_hi: Array,
     k: int,
     slots: int,
-    ranges: NDArray[np.int64],
     outs: NDArray[np.int64],
     n_q: int,
-    f_code: NDArray[np.int64],
+    codes: tuple[NDArray[np.int64], ...],
+    needs: tuple[NDArray[np.int64], ...],
     f_const: Array,
     f_slots: int,
     f_out: int,
@@ -115,7 +204,16 @@ def _fold(
     fq: Array,
     fc: Array,
 ) -> tuple[NDArray[np.int8], NDArray[np.bool_]]:  # pragma: no cover - compiled
-    """The fold certificates of the boxes ``[lo[i], hi[i]]`` (see :func:`fold`)."""
+    """The fold certificates of the boxes ``[lo[i], hi[i]]`` (see :func:`fold`).
+
+    ``codes`` holds, for ``F``, ``(dF/dq, d2F/dq2)``, the ``dF/dX_j`` and ``F``'s
+    float tape in turn, the operations on the pose alone and the others, ``needs``
+    the slots of the former the latter read: the former are evaluated once per
+    pose (box, corner or face), the others per piece (:func:`splits`)."""
+    f_pose, f_rest, f_need = codes[0], codes[1], needs[0]
+    d_pose, d_rest, d_need = codes[2], codes[3], needs[1]
+    x_pose, x_rest, x_need = codes[4], codes[5], needs[2]
+    g_pose, g_rest, g_need = codes[6], codes[7], needs[3]
     n_b = lo.shape[0]
     n_p = p_local.size
     n_corners = 1 << k
@@ -138,12 +236,18 @@ def _fold(
             r_f[f_first_const + c, e] = f_const[c]
     cols = np.empty(f_block, dtype=np.int64)
     tag = np.empty(f_block, dtype=np.int64)
-    code_f = code[ranges[0, 0] : ranges[0, 1]]
-    code_d = code[ranges[1, 0] : ranges[2, 1]]  # dF/dq, d2F/dq2
-    code_x = code[ranges[3, 0] : ranges[2 + k, 1]]  # dF/dX_j
+    idx = np.empty(f_block, dtype=np.int64)
     out_f = outs[0]
+    use = np.empty(n_b, dtype=np.bool_)
+    for i in range(n_b):
+        use[i] = ends[i] != 0
 
     # convexity: d2F/dq2 of one sign (and F, dF/dq finite) on every piece
+    pv_lo = np.empty((d_need.size, n_b))
+    pv_hi = np.empty((d_need.size, n_b))
+    _contexts(
+        d_pose, d_need, r_lo, r_hi, k, first_pose, lo, hi, pd_lo, pd_hi, use, idx, pv_lo, pv_hi
+    )
     convex = np.ones(n_b, dtype=np.bool_)
     concave = np.ones(n_b, dtype=np.bool_)
     t = 0
@@ -151,20 +255,14 @@ def _fold(
         c = 0
         while t < n_p and c < block:
             i = p_local[t]
-            if ends[i] != 0:
-                for j in range(k):
-                    r_lo[j, c] = lo[i, j]
-                    r_hi[j, c] = hi[i, j]
-                r_lo[k, c] = q_lo[t]
-                r_hi[k, c] = q_hi[t]
-                _put(r_lo, r_hi, c, k + 1, qd_lo, qd_hi, t)
-                _put(r_lo, r_hi, c, first_pose, pd_lo, pd_hi, i)
+            if use[i]:
+                _fill(r_lo, r_hi, c, d_need, pv_lo, pv_hi, i, k, q_lo[t], q_hi[t], qd_lo, qd_hi, t)
                 cols[c] = t
                 c += 1
             t += 1
         if c == 0:
             continue
-        _ops(code_d, r_lo, r_hi, c)
+        _ops(d_rest, r_lo, r_hi, c)
         for e in range(c):
             u = cols[e]
             i = p_local[u]
@@ -196,6 +294,34 @@ def _fold(
             ok[i] = (ends[i] & 2) != 0
 
     # the corners: G = s2 F in floats at each piece's ends and middle
+    n_ctx = n_b * n_corners
+    x_f = np.empty((n_ctx, k))
+    d_f = np.empty((fc.shape[1], n_ctx))
+    use_f = np.empty(n_ctx, dtype=np.bool_)
+    for i in range(n_b):
+        for corner in range(n_corners):
+            ctx = i * n_corners + corner
+            use_f[ctx] = ok[i]
+            for j in range(k):
+                x_f[ctx, j] = hi[i, j] if (corner >> j) & 1 else lo[i, j]
+            for x in range(fc.shape[1]):
+                d_f[x, ctx] = fc[corner, x, i]
+    fv = np.empty((g_need.size, n_ctx))
+    m = 0
+    for ctx in range(n_ctx):
+        if use_f[ctx]:
+            for j in range(k):
+                r_f[j, m] = x_f[ctx, j]
+            for x in range(d_f.shape[0]):
+                r_f[f_first_pose + x, m] = d_f[x, ctx]
+            idx[m] = ctx
+            m += 1
+        if m == f_block or (ctx == n_ctx - 1 and m > 0):
+            _fops(g_pose, r_f, m)
+            for e in range(m):
+                for s in range(g_need.size):
+                    fv[s, idx[e]] = r_f[g_need[s], e]
+            m = 0
     g_min = np.full((n_b, n_corners), np.inf)
     g_low = np.full((n_b, n_corners), np.inf)
     t = 0
@@ -205,21 +331,20 @@ def _fold(
             i = p_local[t]
             if ok[i]:
                 for corner in range(n_corners):
+                    ctx = i * n_corners + corner
                     for v in range(3):
-                        for j in range(k):
-                            r_f[j, c] = hi[i, j] if (corner >> j) & 1 else lo[i, j]
+                        for s in range(g_need.size):
+                            r_f[g_need[s], c] = fv[s, ctx]
                         r_f[k, c] = q_lo[t] if v == 0 else (q_mid[t] if v == 1 else q_hi[t])
                         for x in range(f_nq):
                             r_f[k + 1 + x, c] = fq[v, x, t]
-                        for x in range(fc.shape[1]):
-                            r_f[f_first_pose + x, c] = fc[corner, x, i]
                         cols[c] = t
                         tag[c] = corner * 3 + v
                         c += 1
             t += 1
         if c == 0:
             continue
-        _fops(f_code, r_f, c)
+        _fops(g_rest, r_f, c)
         for e in range(c):
             i = p_local[cols[e]]
             corner = tag[e] // 3
@@ -247,6 +372,18 @@ def _fold(
                 best_out[i] = corner
 
     # reachable: G < 0 at the middle of some piece, at the corner best_in
+    point = np.empty((n_b, k))
+    point_d_lo = np.empty((cd_lo.shape[1], n_b))
+    point_d_hi = np.empty((cd_lo.shape[1], n_b))
+    pv_lo = np.empty((f_need.size, n_b))
+    pv_hi = np.empty((f_need.size, n_b))
+    _corner(lo, hi, best_in, point)
+    _at_corner(cd_lo, best_in, point_d_lo)
+    _at_corner(cd_hi, best_in, point_d_hi)
+    _contexts(
+        f_pose, f_need, r_lo, r_hi, k, first_pose, point, point, point_d_lo, point_d_hi, ok, idx,
+        pv_lo, pv_hi,
+    )  # fmt: skip
     reach = np.zeros(n_b, dtype=np.bool_)
     t = 0
     while t < n_p:
@@ -254,21 +391,15 @@ def _fold(
         while t < n_p and c < block:
             i = p_local[t]
             if ok[i]:
-                corner = best_in[i]
-                for j in range(k):
-                    x = hi[i, j] if (corner >> j) & 1 else lo[i, j]
-                    r_lo[j, c] = x
-                    r_hi[j, c] = x
-                r_lo[k, c] = q_mid[t]
-                r_hi[k, c] = q_mid[t]
-                _put(r_lo, r_hi, c, k + 1, md_lo, md_hi, t)
-                _put(r_lo, r_hi, c, first_pose, cd_lo[corner], cd_hi[corner], i)
+                _fill(
+                    r_lo, r_hi, c, f_need, pv_lo, pv_hi, i, k, q_mid[t], q_mid[t], md_lo, md_hi, t
+                )
                 cols[c] = t
                 c += 1
             t += 1
         if c == 0:
             continue
-        _ops(code_f, r_lo, r_hi, c)
+        _ops(f_rest, r_lo, r_hi, c)
         for e in range(c):
             i = p_local[cols[e]]
             g_hi = r_hi[out_f, e] if s2[i] > 0 else -r_lo[out_f, e]
@@ -278,6 +409,13 @@ def _fold(
         ok[i] = ok[i] and reach[i]
 
     # unreachable: G > 0 on every piece, at the corner best_out
+    _corner(lo, hi, best_out, point)
+    _at_corner(cd_lo, best_out, point_d_lo)
+    _at_corner(cd_hi, best_out, point_d_hi)
+    _contexts(
+        f_pose, f_need, r_lo, r_hi, k, first_pose, point, point, point_d_lo, point_d_hi, ok, idx,
+        pv_lo, pv_hi,
+    )  # fmt: skip
     out = np.ones(n_b, dtype=np.bool_)
     t = 0
     while t < n_p:
@@ -285,21 +423,13 @@ def _fold(
         while t < n_p and c < block:
             i = p_local[t]
             if ok[i]:
-                corner = best_out[i]
-                for j in range(k):
-                    x = hi[i, j] if (corner >> j) & 1 else lo[i, j]
-                    r_lo[j, c] = x
-                    r_hi[j, c] = x
-                r_lo[k, c] = q_lo[t]
-                r_hi[k, c] = q_hi[t]
-                _put(r_lo, r_hi, c, k + 1, qd_lo, qd_hi, t)
-                _put(r_lo, r_hi, c, first_pose, cd_lo[corner], cd_hi[corner], i)
+                _fill(r_lo, r_hi, c, f_need, pv_lo, pv_hi, i, k, q_lo[t], q_hi[t], qd_lo, qd_hi, t)
                 cols[c] = t
                 c += 1
             t += 1
         if c == 0:
             continue
-        _ops(code_f, r_lo, r_hi, c)
+        _ops(f_rest, r_lo, r_hi, c)
         for e in range(c):
             i = p_local[cols[e]]
             g_lo = r_lo[out_f, e] if s2[i] > 0 else -r_hi[out_f, e]
@@ -309,6 +439,11 @@ def _fold(
         ok[i] = ok[i] and out[i]
 
     # connectivity: dG/dX_j of one sign on every piece, and that face reachable
+    xv_lo = np.empty((x_need.size, n_b))
+    xv_hi = np.empty((x_need.size, n_b))
+    _contexts(
+        x_pose, x_need, r_lo, r_hi, k, first_pose, lo, hi, pd_lo, pd_hi, ok, idx, xv_lo, xv_hi
+    )
     up = np.ones((n_b, max(k, 1)), dtype=np.bool_)
     down = np.ones((n_b, max(k, 1)), dtype=np.bool_)
     t = 0
@@ -317,19 +452,13 @@ def _fold(
         while t < n_p and c < block:
             i = p_local[t]
             if ok[i]:
-                for j in range(k):
-                    r_lo[j, c] = lo[i, j]
-                    r_hi[j, c] = hi[i, j]
-                r_lo[k, c] = q_lo[t]
-                r_hi[k, c] = q_hi[t]
-                _put(r_lo, r_hi, c, k + 1, qd_lo, qd_hi, t)
-                _put(r_lo, r_hi, c, first_pose, pd_lo, pd_hi, i)
+                _fill(r_lo, r_hi, c, x_need, xv_lo, xv_hi, i, k, q_lo[t], q_hi[t], qd_lo, qd_hi, t)
                 cols[c] = t
                 c += 1
             t += 1
         if c == 0:
             continue
-        _ops(code_x, r_lo, r_hi, c)
+        _ops(x_rest, r_lo, r_hi, c)
         for e in range(c):
             i = p_local[cols[e]]
             for j in range(k):
@@ -343,30 +472,38 @@ def _fold(
                 if not falling:
                     down[i, j] = False
     connected = np.zeros(n_b, dtype=np.bool_)
+    face_lo = np.empty((n_b, k))
+    face_hi = np.empty((n_b, k))
     for j in range(k):
         for side in range(2):
+            for i in range(n_b):
+                use[i] = ok[i] and not connected[i] and (up[i, j] if side == 0 else down[i, j])
+                for a_ in range(k):
+                    face_lo[i, a_] = lo[i, a_]
+                    face_hi[i, a_] = hi[i, a_]
+                face = lo[i, j] if side == 0 else hi[i, j]
+                face_lo[i, j] = face
+                face_hi[i, j] = face
+            _contexts(
+                f_pose, f_need, r_lo, r_hi, k, first_pose, face_lo, face_hi,
+                fd_lo[2 * j + side], fd_hi[2 * j + side], use, idx, pv_lo, pv_hi,
+            )  # fmt: skip
             t = 0
             while t < n_p:
                 c = 0
                 while t < n_p and c < block:
                     i = p_local[t]
-                    if ok[i] and not connected[i] and (up[i, j] if side == 0 else down[i, j]):
-                        for a in range(k):
-                            r_lo[a, c] = lo[i, a]
-                            r_hi[a, c] = hi[i, a]
-                        face = lo[i, j] if side == 0 else hi[i, j]
-                        r_lo[j, c] = face
-                        r_hi[j, c] = face
-                        r_lo[k, c] = q_mid[t]
-                        r_hi[k, c] = q_mid[t]
-                        _put(r_lo, r_hi, c, k + 1, md_lo, md_hi, t)
-                        _put(r_lo, r_hi, c, first_pose, fd_lo[2 * j + side], fd_hi[2 * j + side], i)
+                    if use[i]:
+                        _fill(
+                            r_lo, r_hi, c, f_need, pv_lo, pv_hi, i, k, q_mid[t], q_mid[t],
+                            md_lo, md_hi, t,
+                        )  # fmt: skip
                         cols[c] = t
                         c += 1
                     t += 1
                 if c == 0:
                     continue
-                _ops(code_f, r_lo, r_hi, c)
+                _ops(f_rest, r_lo, r_hi, c)
                 for e in range(c):
                     i = p_local[cols[e]]
                     g_hi = r_hi[out_f, e] if s2[i] > 0 else -r_lo[out_f, e]
@@ -378,6 +515,59 @@ def _fold(
             convexity[i] = 1 if s2[i] > 0 else -1
         connected[i] = connected[i] and ok[i]
     return convexity, connected
+
+
+def _split(
+    code: NDArray[np.int64], pose: NDArray[np.bool_], outs: Any
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """The operations of ``code`` on the pose and constants alone (``pose``: the
+    slots that are so, the inputs' marked), the others, and the slots of the
+    former (or inputs) that the others or the outputs ``outs`` read."""
+    pose = pose.copy()
+    first, rest = [], []
+    for row in code:
+        _, target, a, b = (int(v) for v in row)
+        if pose[a] and pose[b]:
+            first.append(row)
+            pose[target] = True
+        else:
+            rest.append(row)
+    needed = {int(s) for row in rest for s in row[2:] if pose[s]}
+    needed |= {int(o) for o in outs if pose[o]}
+    return (
+        np.array(first, dtype=np.int64).reshape(-1, 4),
+        np.array(rest, dtype=np.int64).reshape(-1, 4),
+        np.array(sorted(needed), dtype=np.int64),
+    )
+
+
+def _pose_slots(prog: tp.Program) -> NDArray[np.bool_]:
+    """The slots of ``prog`` on the pose or constants alone before any operation:
+    the pose coordinates, their derived inputs and the constants."""
+    k = prog.k
+    first_pose = k + 1 + len(prog.derived)
+    out = np.zeros(prog.slots, dtype=bool)
+    out[:k] = True
+    out[first_pose : first_pose + len(prog.pose_derived) + prog.const_lo.size] = True
+    return out
+
+
+def splits(
+    prog: tp.Program, fprog: tp.Program
+) -> tuple[tuple[NDArray[np.int64], ...], tuple[NDArray[np.int64], ...]]:
+    """The ``codes`` and ``needs`` arguments of :func:`_fold`: :func:`_split` of
+    ``F``, of ``dF/dq`` with ``d2F/dq2``, of the ``dF/dX_j`` and of ``F``'s float tape."""
+    k, rows, outs = prog.k, prog.ranges, prog.outs
+    pose = _pose_slots(prog)
+    parts = [
+        _split(prog.code[rows[0, 0] : rows[0, 1]], pose, outs[:1]),
+        _split(prog.code[rows[1, 0] : rows[2, 1]], pose, outs[1:3]),
+        _split(prog.code[rows[3, 0] : rows[2 + k, 1]], pose, outs[3 : 3 + k]),
+        _split(fprog.code, _pose_slots(fprog), fprog.outs[:1]),
+    ]
+    codes = tuple(np.ascontiguousarray(a) for part in parts for a in part[:2])
+    needs = tuple(np.ascontiguousarray(part[2]) for part in parts)
+    return codes, needs
 
 
 def float_program(f: Any) -> tp.Program | None:
@@ -401,6 +591,7 @@ def _float_values(functions: Any, values: list[Array], n: int) -> Array:
 def fold(
     prog: tp.Program,
     fprog: tp.Program,
+    split: tuple[tuple[NDArray[np.int64], ...], tuple[NDArray[np.int64], ...]],
     lo: Array,
     hi: Array,
     box_pose: tuple[Array, Array],
@@ -413,8 +604,9 @@ def fold(
 
     ``prog`` is the program of the tapes of ``F``, ``dF/dq``, ``d2F/dq2`` and the
     ``dF/dX_j`` (in that order), ``fprog`` that of ``F``'s float tape
-    (:func:`float_program`). Over the boxes ``[lo[i], hi[i]]`` (rows of ``(n, k)``
-    arrays; ``box_pose`` the derived inputs of the pose over them, as
+    (:func:`float_program`), ``split`` their operations (:func:`splits`). Over
+    the boxes ``[lo[i], hi[i]]`` (rows of ``(n, k)`` arrays; ``box_pose`` the
+    derived inputs of the pose over them, as
     :func:`~moveability.mechanisms.tape.pose_values` gives them) and their pieces
     (joint enclosures ``q``, box ``p_local``, in box order, ``F`` finite there or
     not): ``ends[i]`` says whether ``F > 0`` (bit 1) or ``F < 0`` (bit 2) at both
@@ -450,9 +642,9 @@ def fold(
 
     d_pose = len(prog.pose_derived)
     convexity, connected = _fold(
-        prog.code, prog.const_lo, prog.const_hi, k, prog.slots, prog.ranges, prog.outs,
-        len(prog.derived), fprog.code, np.ascontiguousarray(fprog.const_lo), fprog.slots,
-        int(fprog.outs[0]), len(fprog.derived),
+        prog.code, prog.const_lo, prog.const_hi, k, prog.slots, prog.outs, len(prog.derived),
+        split[0], split[1], np.ascontiguousarray(fprog.const_lo), fprog.slots, int(fprog.outs[0]),
+        len(fprog.derived),
         np.ascontiguousarray(lo, dtype=np.float64), np.ascontiguousarray(hi, dtype=np.float64),
         np.ascontiguousarray(ends, dtype=np.int64), np.ascontiguousarray(p_local, dtype=np.int64),
         np.ascontiguousarray(q.lo, dtype=np.float64), np.ascontiguousarray(q.hi, dtype=np.float64),

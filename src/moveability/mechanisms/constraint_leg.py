@@ -680,21 +680,28 @@ class ConstraintLeg:
             above_a[active] = np.where(pos[k:], above_a[active], m2)
         return below_a, above_b
 
-    def _fold_programs(self) -> tuple[tape.Program, tape.Program] | None:
+    def _fold_programs(
+        self,
+    ) -> tuple[tape.Program, tape.Program, tuple[Any, Any]] | None:
         """The program of the tapes of ``F``, ``dF/dq``, ``d2F/dq2`` and the ``dF/dX_j``,
-        and that of ``F``'s float tape (:func:`moveability.mechanisms._fold_kernels.float_program`);
+        that of ``F``'s float tape (:func:`moveability.mechanisms._fold_kernels.float_program`)
+        and their operations split (:func:`~moveability.mechanisms._fold_kernels.splits`);
         None where a function has no tape. Built once."""
         if "_fold_memo" not in self.__dict__:
-            from ._fold_kernels import float_program
+            from ._fold_kernels import float_program, splits
 
             tapes = [getattr(g, "tape", None) for g in (self.f, self.df_dq, self.d2f_dq2)]
             tapes += [getattr(g, "tape", None) for g in self.df_dx]
             found = [t for t in tapes if isinstance(t, tape.Tape)]
             prog = tape.program(found) if len(found) == len(tapes) else None
             fprog = float_program(self.f) if prog is not None else None
-            self.__dict__["_fold_memo"] = None if fprog is None else (prog, fprog)
-        memo: tuple[tape.Program, tape.Program] | None = self.__dict__["_fold_memo"]
-        return memo
+            memo = None
+            if prog is not None and fprog is not None:
+                memo = (prog, fprog, splits(prog, fprog))
+            self.__dict__["_fold_memo"] = memo
+        memo_: tuple[tape.Program, tape.Program, tuple[Any, Any]] | None
+        memo_ = self.__dict__["_fold_memo"]
+        return memo_
 
     def _fold(
         self,
@@ -731,11 +738,12 @@ class ConstraintLeg:
         local = np.full(runs.box.size, -1, dtype=np.intp)
         local[r] = np.arange(n_b)
         pc = runs.pieces
-        prog, fprog = progs
+        prog, fprog, split = progs
         b_lo, b_hi = tape.pose_box_values(prog, lo, hi)
         return fold(
             prog,
             fprog,
+            split,
             lo[boxes],
             hi[boxes],
             (b_lo[:, boxes], b_hi[:, boxes]),
