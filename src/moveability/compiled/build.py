@@ -209,6 +209,9 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
             array(F8, 3), array(F8, 3), array(F8, 3),
         )
     ],
+    "moveability.mechanisms.tape._pose_ops": [
+        (array(I8, 2), R1, R1, I8, I8, I8, R2, R2, R2, R2, array(I8))
+    ],
 }
 
 

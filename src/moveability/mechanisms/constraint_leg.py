@@ -360,6 +360,8 @@ class ConstraintLeg:
             prog = tape.program(found) if len(found) == len(tapes) else None
             memo = None
             if prog is not None:
+                # the operations on the pose alone once per box (tape.hoisted)
+                prog = tape.hoisted(prog)
                 edges = self._edges()
                 q = Interval(edges[:-1], edges[1:])
                 memo = (prog, q.lo, q.hi, tape.derived_values(prog, q))
