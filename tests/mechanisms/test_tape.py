@@ -423,3 +423,24 @@ def test_compiled_fold_of_convex_and_concave_folds(sign, monkeypatch) -> None:
     assert (compiled.status == fold).sum() > 100 and compiled.fold_connected.sum() > 50
     convexity = np.concatenate([s[0] for s in seen])
     assert (convexity == sign).sum() > 100 and not (convexity == -sign).any()
+
+
+def test_three_rrr_rows_of_a_match_the_interpreted_functions() -> None:
+    """``a_row_boxes`` of the 3-RRR's legs (the tapes of ``dF/dX_j``, the derived
+    inputs of the pose computed once for the three) equals the functions on
+    Intervals bit for bit, over boxes of every kind and over points (``lo is hi``)."""
+    from moveability.mechanisms.three_rrr import ThreeRRR
+
+    mechanism = ThreeRRR.default()
+    rng = np.random.default_rng(9)
+    low, high = (np.asarray(b, dtype=float) for b in mechanism.bounds)
+    lo, hi = rrr_boxes(rng, low, high, 700)
+    q_lo, q_hi = boxes(rng, 700, 1, 3.0)
+    q = Interval(q_lo[:, 0], q_hi[:, 0])
+    box = np.arange(700)
+    for leg in mechanism.legs:
+        for a, b in ((lo, hi), (lo, lo)):
+            with np.errstate(all="ignore"):
+                rows = leg.a_row_boxes(a, b, q)
+                want = [interpreted(g, a, b, box, q) for g in leg.df_dx]
+            assert all(same(x, y) for x, y in zip(rows, want, strict=True))

@@ -221,7 +221,9 @@ class ConstraintLeg:
     def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]:
         """Enclosures of ``dF/dX_j`` over boxes of poses and joint enclosures."""
         box = np.arange(lo.shape[0])
-        return [self._box_eval(g, lo, hi, box, angles) for g in self.df_dx]
+        # the derived inputs of the pose (sin and cos of an angle) once for every j
+        with tape.remembered_boxes():
+            return [self._box_eval(g, lo, hi, box, angles) for g in self.df_dx]
 
     def angles(self, points: Array, clip: bool = False) -> Array:
         """Joint value of each branch at each pose, shape (m, 2); NaN where unreachable.
