@@ -579,13 +579,12 @@ def float_program(f: Any) -> tp.Program | None:
     return tp.program([t])
 
 
-def _float_values(functions: Any, values: list[Array], n: int) -> Array:
-    """Each function of the float arrays ``values`` (one per argument slot), shape ``(d, n)``."""
-    out = np.empty((len(functions), n))
+def _float_values(functions: Any, values: list[Array], out: Array) -> None:
+    """Each function of the float arrays ``values`` (one per argument slot) into the
+    rows of ``out``."""
     with np.errstate(all="ignore"):
         for e, (function, args) in enumerate(functions):
-            out[e] = np.asarray(function(*(values[a] for a in args)), dtype=np.float64)
-    return out
+            out[e] = function(*(values[a] for a in args))
 
 
 def fold(
@@ -633,8 +632,12 @@ def fold(
     # the pose at the corners
     q_float = [np.ascontiguousarray(v, dtype=np.float64) for v in (q.lo, q_mid, q.hi)]
     joint = [(g, (0,)) for g in fprog.derived]
-    fq = np.stack([_float_values(joint, [v], n_p) for v in q_float])
-    fc = np.stack([_float_values(fprog.pose_derived, list(p.T), n_b) for p in corners])
+    fq = np.empty((3, len(joint), n_p))
+    for v, values in enumerate(q_float):
+        _float_values(joint, [values], fq[v])
+    fc = np.empty((len(corners), len(fprog.pose_derived), n_b))
+    for c, p in enumerate(corners):
+        _float_values(fprog.pose_derived, list(p.T), fc[c])
 
     def c3(parts: list[tuple[Array, Array]], which: int, d: int) -> Array:
         out = np.stack([p[which] for p in parts]) if parts else np.empty((0, d, n_b))
@@ -653,6 +656,6 @@ def fold(
         np.ascontiguousarray(box_pose[0], dtype=np.float64),
         np.ascontiguousarray(box_pose[1], dtype=np.float64),
         c3(cd, 0, d_pose), c3(cd, 1, d_pose), c3(fd, 0, d_pose), c3(fd, 1, d_pose),
-        np.ascontiguousarray(fq), np.ascontiguousarray(fc),
+        fq, fc,
     )  # fmt: skip
     return convexity, connected

@@ -1239,6 +1239,10 @@ def _isolate_level(
     q_next = 0
     near_rows = np.empty(block, dtype=np.int64)
     near_qis = np.empty(block, dtype=np.int64)
+    # each box's mean-value offsets, computed at its first use
+    off_lo = np.empty((n_box, max(k, 1)))
+    off_hi = np.empty((n_box, max(k, 1)))
+    off_done = np.zeros(n_box, dtype=np.bool_)
     for start in range(0, m, block):
         n = min(block, m - start)
         # the natural enclosure of F over box x piece
@@ -1308,15 +1312,22 @@ def _isolate_level(
             e = near[t]
             b = rows[e]
             # the mean-value form, each offset widened by an ulp of its bounds
+            if not off_done[b]:
+                for j in range(k):
+                    centre = 0.5 * (lo[b, j] + hi[b, j])
+                    o_lo = lo[b, j] - centre
+                    o_hi = hi[b, j] - centre
+                    off_lo[b, j] = np.nextafter(
+                        o_lo if (o_lo < 0.0 or o_lo != o_lo) else 0.0, -np.inf
+                    )
+                    off_hi[b, j] = np.nextafter(
+                        o_hi if (o_hi > 0.0 or o_hi != o_hi) else 0.0, np.inf
+                    )
+                off_done[b] = True
             m_lo = r_lo[out_f, t]
             m_hi = r_hi[out_f, t]
             for j in range(k):
-                centre = 0.5 * (lo[b, j] + hi[b, j])
-                o_lo = lo[b, j] - centre
-                o_hi = hi[b, j] - centre
-                o_lo = np.nextafter(o_lo if (o_lo < 0.0 or o_lo != o_lo) else 0.0, -np.inf)
-                o_hi = np.nextafter(o_hi if (o_hi > 0.0 or o_hi != o_hi) else 0.0, np.inf)
-                p_lo, p_hi = interval_mul(dj_lo[j, t], dj_hi[j, t], o_lo, o_hi)
+                p_lo, p_hi = interval_mul(dj_lo[j, t], dj_hi[j, t], off_lo[b, j], off_hi[b, j])
                 m_lo, m_hi = interval_add(m_lo, m_hi, p_lo, p_hi)
             m_lo = -np.inf if m_lo != m_lo else m_lo
             m_hi = np.inf if m_hi != m_hi else m_hi
