@@ -1243,6 +1243,8 @@ def _isolate_level(
     off_lo = np.empty((n_box, max(k, 1)))
     off_hi = np.empty((n_box, max(k, 1)))
     off_done = np.zeros(n_box, dtype=np.bool_)
+    mv_lo = np.empty(block)
+    mv_hi = np.empty(block)
     for start in range(0, m, block):
         n = min(block, m - start)
         # the natural enclosure of F over box x piece
@@ -1308,10 +1310,10 @@ def _isolate_level(
                 r_lo[first_pose + x, t] = centre_lo[x, b]
                 r_hi[first_pose + x, t] = centre_hi[x, b]
         _ops(f_code, r_lo, r_hi, c)
+        # the mean-value form, each offset widened by an ulp of its bounds (the
+        # pieces side by side: each one's sum over j in order)
         for t in range(c):
-            e = near[t]
-            b = rows[e]
-            # the mean-value form, each offset widened by an ulp of its bounds
+            b = rows[near[t]]
             if not off_done[b]:
                 for j in range(k):
                     centre = 0.5 * (lo[b, j] + hi[b, j])
@@ -1324,11 +1326,18 @@ def _isolate_level(
                         o_hi if (o_hi > 0.0 or o_hi != o_hi) else 0.0, np.inf
                     )
                 off_done[b] = True
-            m_lo = r_lo[out_f, t]
-            m_hi = r_hi[out_f, t]
-            for j in range(k):
+            mv_lo[t] = r_lo[out_f, t]
+            mv_hi[t] = r_hi[out_f, t]
+        for j in range(k):
+            for t in range(c):
+                b = rows[near[t]]
                 p_lo, p_hi = interval_mul(dj_lo[j, t], dj_hi[j, t], off_lo[b, j], off_hi[b, j])
-                m_lo, m_hi = interval_add(m_lo, m_hi, p_lo, p_hi)
+                mv_lo[t], mv_hi[t] = interval_add(mv_lo[t], mv_hi[t], p_lo, p_hi)
+        for t in range(c):
+            e = near[t]
+            b = rows[e]
+            m_lo = mv_lo[t]
+            m_hi = mv_hi[t]
             m_lo = -np.inf if m_lo != m_lo else m_lo
             m_hi = np.inf if m_hi != m_hi else m_hi
             f_lo = max(nat_lo[e], m_lo)
