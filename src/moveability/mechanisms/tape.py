@@ -906,7 +906,7 @@ def hoisted(prog: Program) -> Program:
     box (and at its centre), and the values the other operations read become
     derived inputs of the pose, after ``prog``'s. The same operations on the same
     operands: the same bounds, with fewer operations per piece. ``prog`` itself
-    where it has none.
+    where it has none, or no more than two per value the others read.
 
     Examples
     --------
@@ -944,6 +944,10 @@ def hoisted(prog: Program) -> Program:
     rest = prog.code[~on_pose]
     read = set(rest[:, 2:].ravel().tolist()) | set(prog.outs.tolist())
     needed = np.array(sorted(s for s in read if s >= first_temp and pose[s]), dtype=np.int64)
+    if on_pose.sum() <= 2 * needed.size:
+        # each value taken out is copied into every piece's registers: not worth it
+        # for an operation or two (2 * x in the custom five-bar's dF/dx)
+        return prog
     new_const = first_const + needed.size
     mapping = np.full(prog.slots, -1, dtype=np.int64)
     mapping[:first_const] = np.arange(first_const)
