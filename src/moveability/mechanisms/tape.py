@@ -912,10 +912,10 @@ def hoisted(prog: Program) -> Program:
     --------
     >>> from moveability.mechanisms import expressions as ex
     >>> cos = traced(ex.cos, "cos")
-    >>> p = program([trace(lambda x, q: (2.0 * x + 1.0) * cos(q), 1)])
+    >>> p = program([trace(lambda x, q: (2.0 * x + 1.0) * (x - 3.0) * cos(q), 1)])
     >>> h = hoisted(p)
     >>> p.code.shape[0], h.code.shape[0], h.hoist[2].size
-    (3, 1, 1)
+    (5, 1, 1)
     >>> lo, hi = np.array([[0.0], [1.0]]), np.array([[0.5], [3.0]])
     >>> box = np.array([0, 1])
     >>> q = (np.array([0.1, 0.2]), np.array([0.3, 0.4]))
