@@ -273,3 +273,174 @@ def test_three_rrr_compiled_isolation_matches_the_interpreted_one(source, monkey
         for g in (leg.f, leg.df_dq, leg.d2f_dq2, *leg.df_dx):
             with np.errstate(all="ignore"):
                 assert same(tp.run(g.tape, lo, hi, box, q), interpreted(g, lo, hi, box, q))
+
+
+@pytest.mark.parametrize("source", ["default", "examples/three-rrr.toml"])
+def test_three_rrr_compiled_fold_matches_the_interpreted_one(source, monkeypatch) -> None:
+    """The fold certificates of the 3-RRR's legs (``ConstraintLeg._fold``: one
+    kernel on the tapes and the float tape of F, ``_fold_kernels.fold``) equal
+    those of ``_fold_interpreted`` on every call ``reach`` makes, bit for bit,
+    over boxes of every kind (points, thin and wide ones, across -pi / pi, the
+    whole turn) and boxes about the leg's outer and inner folds (``|B - A| =
+    l1 + l2`` and ``|l1 - l2|``), many of them folds, some fold-connected."""
+    from moveability.mechanisms.constraint_leg import ConstraintLeg
+    from moveability.mechanisms.three_rrr import ThreeRRR
+
+    mechanism = ThreeRRR.default() if source == "default" else from_spec(load_spec(source))
+    rng = np.random.default_rng(5 if source == "default" else 6)
+    low, high = (np.asarray(b, dtype=float) for b in mechanism.bounds)
+    seen: list[tuple[np.ndarray, np.ndarray]] = []
+    compiled_fold = ConstraintLeg._fold
+
+    def both(self, lo, hi, runs, boxes, r, ends=None):
+        got = compiled_fold(self, lo, hi, runs, boxes, r, ends)
+        want = self._fold_interpreted(lo, hi, runs, boxes, r)
+        assert got[0].dtype == want[0].dtype and np.array_equal(got[0], want[0])
+        assert got[1].dtype == want[1].dtype and np.array_equal(got[1], want[1])
+        seen.append(got)
+        return got
+
+    for i, leg in enumerate(mechanism.legs):
+        lo, hi = rrr_boxes(rng, low, high, 600)
+        # poses whose B - A is on a fold circle, and boxes about them
+        a, b = np.asarray(mechanism.base[i]), np.asarray(mechanism.platform[i])
+        l1, l2 = mechanism.proximal[i], mechanism.distal[i]
+        n = 800
+        phi = rng.uniform(-np.pi, np.pi, n)
+        angle = rng.uniform(-np.pi, np.pi, n)
+        radius = np.where(np.arange(n) % 2 == 0, l1 + l2, abs(l1 - l2))
+        u = radius[:, None] * np.stack([np.cos(angle), np.sin(angle)], axis=1)
+        turned = np.stack(
+            [np.cos(phi) * b[0] - np.sin(phi) * b[1], np.sin(phi) * b[0] + np.cos(phi) * b[1]],
+            axis=1,
+        )
+        centre = np.column_stack([a + u - turned, phi])
+        half = rng.choice([0.0, 1e-3, 0.01, 0.1], size=(n, 1)) * np.array([1.0, 1.0, 0.3])
+        lo = np.concatenate([lo, centre - half])
+        hi = np.concatenate([hi, centre + half])
+        assert leg._fold_programs() is not None
+        with monkeypatch.context() as m:
+            m.setattr(ConstraintLeg, "_fold", both)
+            compiled = leg.reach(lo, hi)
+        with monkeypatch.context() as m:
+            m.setattr(ConstraintLeg, "_fold_programs", lambda self: None)
+            plain = leg.reach(lo, hi)
+        assert (compiled.status == plain.status).all()
+        assert (compiled.fold_connected == plain.fold_connected).all()
+        assert (compiled.status == 2).sum() > 50  # (the RR legs' folds are convex)
+        assert compiled.fold_connected.sum() > 20
+    assert sum(int(s[1].sum()) for s in seen) > 60
+
+
+def signed_leg(sign: float):
+    """A 3-RRR leg (A = (0, 10), b = (0, 3), lengths 7 and 5) with its constraint
+    multiplied by ``sign``: its folds are convex, or concave with ``sign = -1``."""
+    from moveability.mechanisms.constraint_leg import ConstraintLeg
+    from moveability.mechanisms.three_rrr import _Taped
+
+    def make(name):
+        def functions(cos, sin):
+            def uv(x, y, phi):
+                return x - sin(phi) * 3.0, y + cos(phi) * 3.0 - 10.0
+
+            def f(x, y, phi, q):
+                u, v = uv(x, y, phi)
+                return sign * ((u - 7.0 * cos(q)) ** 2 + (v - 7.0 * sin(q)) ** 2 - 25.0)
+
+            def df_dq(x, y, phi, q):
+                u, v = uv(x, y, phi)
+                return sign * 14.0 * (u * sin(q) - v * cos(q))
+
+            def d2f_dq2(x, y, phi, q):
+                u, v = uv(x, y, phi)
+                return sign * 14.0 * (u * cos(q) + v * sin(q))
+
+            def df_dx(x, y, phi, q):
+                u, _ = uv(x, y, phi)
+                return sign * 2.0 * (u - 7.0 * cos(q))
+
+            def df_dy(x, y, phi, q):
+                _, v = uv(x, y, phi)
+                return sign * 2.0 * (v - 7.0 * sin(q))
+
+            def df_dphi(x, y, phi, q):
+                u, v = uv(x, y, phi)
+                du, dv = -(cos(phi) * 3.0), -(sin(phi) * 3.0)
+                return sign * 2.0 * ((u - 7.0 * cos(q)) * du + (v - 7.0 * sin(q)) * dv)
+
+            return locals()[name]
+
+        return _Taped(functions)
+
+    return ConstraintLeg(
+        "q",
+        f=make("f"),
+        df_dq=make("df_dq"),
+        d2f_dq2=make("d2f_dq2"),
+        df_dx=(make("df_dx"), make("df_dy"), make("df_dphi")),
+    )
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0], ids=["convex", "concave"])
+def test_compiled_fold_of_convex_and_concave_folds(sign, monkeypatch) -> None:
+    """``_fold`` compiled and interpreted on a leg whose folds are convex (F at a
+    minimum), or concave (-F): the same certificates, bit for bit, over boxes about
+    its fold circles (points, thin and wide, across -pi / pi)."""
+    from moveability.mechanisms.constraint_leg import ConstraintLeg
+
+    leg = signed_leg(sign)
+    rng = np.random.default_rng(8)
+    n = 1500
+    phi = rng.uniform(-np.pi, np.pi, n)
+    phi[: n // 5] = rng.choice([-np.pi, np.pi], size=n // 5)  # about the cut
+    angle = rng.uniform(-np.pi, np.pi, n)
+    radius = np.where(np.arange(n) % 2 == 0, 12.0, 2.0) + rng.normal(scale=0.05, size=n)
+    x = radius * np.cos(angle) + np.sin(phi) * 3.0
+    y = radius * np.sin(angle) - np.cos(phi) * 3.0 + 10.0
+    centre = np.column_stack([x, y, phi])
+    half = rng.choice([0.0, 1e-3, 0.01, 0.1, 0.5], size=(n, 1)) * np.array([1.0, 1.0, 0.3])
+    lo, hi = centre - half, centre + half
+    seen = []
+    compiled_fold = ConstraintLeg._fold
+
+    def both(self, lo, hi, runs, boxes, r, ends=None):
+        got = compiled_fold(self, lo, hi, runs, boxes, r, ends)
+        want = self._fold_interpreted(lo, hi, runs, boxes, r)
+        assert got[0].dtype == want[0].dtype and np.array_equal(got[0], want[0])
+        assert got[1].dtype == want[1].dtype and np.array_equal(got[1], want[1])
+        seen.append(got)
+        return got
+
+    with monkeypatch.context() as m:
+        m.setattr(ConstraintLeg, "_fold", both)
+        compiled = leg.reach(lo, hi)
+    with monkeypatch.context() as m:
+        m.setattr(ConstraintLeg, "_fold_programs", lambda self: None)
+        plain = leg.reach(lo, hi)
+    assert (compiled.status == plain.status).all()
+    assert (compiled.fold_connected == plain.fold_connected).all()
+    fold = 2 if sign > 0 else 3
+    assert (compiled.status == fold).sum() > 100 and compiled.fold_connected.sum() > 50
+    convexity = np.concatenate([s[0] for s in seen])
+    assert (convexity == sign).sum() > 100 and not (convexity == -sign).any()
+
+
+def test_three_rrr_rows_of_a_match_the_interpreted_functions() -> None:
+    """``a_row_boxes`` of the 3-RRR's legs (the tapes of ``dF/dX_j``, the derived
+    inputs of the pose computed once for the three) equals the functions on
+    Intervals bit for bit, over boxes of every kind and over points (``lo is hi``)."""
+    from moveability.mechanisms.three_rrr import ThreeRRR
+
+    mechanism = ThreeRRR.default()
+    rng = np.random.default_rng(9)
+    low, high = (np.asarray(b, dtype=float) for b in mechanism.bounds)
+    lo, hi = rrr_boxes(rng, low, high, 700)
+    q_lo, q_hi = boxes(rng, 700, 1, 3.0)
+    q = Interval(q_lo[:, 0], q_hi[:, 0])
+    box = np.arange(700)
+    for leg in mechanism.legs:
+        for a, b in ((lo, hi), (lo, lo)):
+            with np.errstate(all="ignore"):
+                rows = leg.a_row_boxes(a, b, q)
+                want = [interpreted(g, a, b, box, q) for g in leg.df_dx]
+            assert all(same(x, y) for x, y in zip(rows, want, strict=True))

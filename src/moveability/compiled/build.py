@@ -258,6 +258,17 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
             W1,
         )
     ],
+    "moveability.mechanisms._fold_kernels._fold": [
+        (
+            array(I8, 2), R1, R1, I8, I8, array(I8), I8, uniform(8, array(I8, 2)),
+            uniform(4, array(I8)), R1, I8, I8, I8, R2, R2, array(I8), array(I8), R1, R1, R1,
+            array(B1), R2, R2, R2, R2, R2, R2, array(F8, 3), array(F8, 3), array(F8, 3),
+            array(F8, 3), array(F8, 3), array(F8, 3),
+        )
+    ],
+    "moveability.mechanisms.tape._pose_ops": [
+        (array(I8, 2), R1, R1, I8, I8, I8, R2, R2, R2, R2, array(I8))
+    ],
 }
 
 

@@ -221,7 +221,9 @@ class ConstraintLeg:
     def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]:
         """Enclosures of ``dF/dX_j`` over boxes of poses and joint enclosures."""
         box = np.arange(lo.shape[0])
-        return [self._box_eval(g, lo, hi, box, angles) for g in self.df_dx]
+        # the derived inputs of the pose (sin and cos of an angle) once for every j
+        with tape.remembered_boxes():
+            return [self._box_eval(g, lo, hi, box, angles) for g in self.df_dx]
 
     def angles(self, points: Array, clip: bool = False) -> Array:
         """Joint value of each branch at each pose, shape (m, 2); NaN where unreachable.
@@ -360,6 +362,8 @@ class ConstraintLeg:
             prog = tape.program(found) if len(found) == len(tapes) else None
             memo = None
             if prog is not None:
+                # the operations on the pose alone once per box (tape.hoisted)
+                prog = tape.hoisted(prog)
                 edges = self._edges()
                 q = Interval(edges[:-1], edges[1:])
                 memo = (prog, q.lo, q.hi, tape.derived_values(prog, q))
@@ -616,7 +620,8 @@ class ConstraintLeg:
             r = run_of_box[single]
             hull.lo[single] = runs.start[r]
             hull.hi[single] = runs.end.hi[r]
-            convexity, connected = self._fold(lo, hi, runs, single, r)
+            ends = (f_start[r], f_end[r])
+            convexity, connected = self._fold(lo, hi, runs, single, r, ends)
             fold = (convexity != 0) & (status[single] == REACH_UNKNOWN)
             status[single[fold & (convexity > 0)]] = FOLD_OUTER
             status[single[fold & (convexity < 0)]] = FOLD_INNER
@@ -679,7 +684,80 @@ class ConstraintLeg:
             above_a[active] = np.where(pos[k:], above_a[active], m2)
         return below_a, above_b
 
+    def _fold_programs(
+        self,
+    ) -> tuple[tape.Program, tape.Program, tuple[Any, Any]] | None:
+        """The program of the tapes of ``F``, ``dF/dq``, ``d2F/dq2`` and the ``dF/dX_j``,
+        that of ``F``'s float tape (:func:`moveability.mechanisms._fold_kernels.float_program`)
+        and their operations split (:func:`~moveability.mechanisms._fold_kernels.splits`);
+        None where a function has no tape. Built once."""
+        if "_fold_memo" not in self.__dict__:
+            from ._fold_kernels import float_program, splits
+
+            tapes = [getattr(g, "tape", None) for g in (self.f, self.df_dq, self.d2f_dq2)]
+            tapes += [getattr(g, "tape", None) for g in self.df_dx]
+            found = [t for t in tapes if isinstance(t, tape.Tape)]
+            prog = tape.program(found) if len(found) == len(tapes) else None
+            fprog = float_program(self.f) if prog is not None else None
+            memo = None
+            if prog is not None and fprog is not None:
+                memo = (prog, fprog, splits(prog, fprog))
+            self.__dict__["_fold_memo"] = memo
+        memo_: tuple[tape.Program, tape.Program, tuple[Any, Any]] | None
+        memo_ = self.__dict__["_fold_memo"]
+        return memo_
+
     def _fold(
+        self,
+        lo: Array,
+        hi: Array,
+        runs: _Runs,
+        boxes: NDArray[np.intp],
+        r: NDArray[np.intp],
+        ends: tuple[Interval, Interval] | None = None,
+    ) -> tuple[NDArray[np.int8], NDArray[np.bool_]]:
+        """Fold certificates of boxes with one run ``r``: convexity sign (0: none), connected.
+
+        ``ends``: F at the runs' two ends (over each box), when known. The steps of
+        :meth:`_fold_interpreted` in one compiled loop where every function has a
+        tape and ``F`` a float tape (:mod:`moveability.mechanisms._fold_kernels`)."""
+        progs = self._fold_programs()
+        if progs is None:
+            return self._fold_interpreted(lo, hi, runs, boxes, r)
+        from ._fold_kernels import fold
+
+        n_b = boxes.size
+        if ends is None:
+            ends = (
+                self._box_eval(self.f, lo, hi, boxes, ex.points(runs.start[r])),
+                self._box_eval(self.f, lo, hi, boxes, runs.end[r]),
+            )
+        f_start, f_end = ends
+        may_convex = (f_start.lo > 0) & (f_end.lo > 0)
+        may_concave = (f_start.hi < 0) & (f_end.hi < 0)
+        if not (may_convex | may_concave).any():
+            return np.zeros(n_b, dtype=np.int8), np.zeros(n_b, dtype=bool)
+        sel = np.isin(runs.run_of_piece, r[may_convex | may_concave])
+        p_idx = np.flatnonzero(sel)
+        local = np.full(runs.box.size, -1, dtype=np.intp)
+        local[r] = np.arange(n_b)
+        pc = runs.pieces
+        prog, fprog, split = progs
+        b_lo, b_hi = tape.pose_box_values(prog, lo, hi)
+        return fold(
+            prog,
+            fprog,
+            split,
+            lo[boxes],
+            hi[boxes],
+            (b_lo[:, boxes], b_hi[:, boxes]),
+            may_convex.astype(np.int64) + 2 * may_concave.astype(np.int64),
+            local[runs.run_of_piece[p_idx]],
+            Interval(pc.lo[p_idx], pc.hi[p_idx]),
+            pc.finite[p_idx],
+        )
+
+    def _fold_interpreted(
         self, lo: Array, hi: Array, runs: _Runs, boxes: NDArray[np.intp], r: NDArray[np.intp]
     ) -> tuple[NDArray[np.int8], NDArray[np.bool_]]:
         """Fold certificates of boxes with one run ``r``: convexity sign (0: none), connected."""

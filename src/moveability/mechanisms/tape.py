@@ -799,6 +799,10 @@ class Program:
     fixed_slots: NDArray[np.int64]
     varying: NDArray[np.int64]
     varying_ranges: NDArray[np.int64]
+    #: :func:`hoisted`: the program it comes from, the operations on the pose alone
+    #: taken out of it (in its slots) and the slots of their values the others read,
+    #: which follow the derived inputs of the pose here (:func:`pose_values`)
+    hoist: tuple[Program, NDArray[np.int64], NDArray[np.int64]] | None = None
 
 
 def program(tapes: Sequence[Tape]) -> Program | None:
@@ -861,15 +865,8 @@ def program(tapes: Sequence[Tape]) -> Program | None:
         temp_at += t.slots - t_temp
     code = np.ascontiguousarray(np.concatenate(codes).reshape(-1, 4))
     # an operation is fixed when no operand depends on a pose coordinate
-    on_pose = np.zeros(temp_at, dtype=bool)
-    on_pose[:k] = True
-    on_pose[first_pose:first_const] = True
-    fixed = np.zeros(code.shape[0], dtype=bool)
-    for row, (_, target, a, b) in enumerate(code):
-        fixed[row] = not (on_pose[a] or on_pose[b])
-        on_pose[target] = not fixed[row]
+    fixed, before = _fixed_split(code, k, first_pose, first_const, temp_at)
     bounds = np.array(ranges, dtype=np.int64).reshape(-1, 2)
-    before = np.concatenate([[0], np.cumsum(~fixed)])
     return Program(
         k=k,
         derived=tuple(derived),
@@ -885,6 +882,146 @@ def program(tapes: Sequence[Tape]) -> Program | None:
         varying=np.ascontiguousarray(code[~fixed]).reshape(-1, 4),
         varying_ranges=np.ascontiguousarray(before[bounds]),
     )
+
+
+def _fixed_split(
+    code: NDArray[np.int64], k: int, first_pose: int, first_const: int, slots: int
+) -> tuple[NDArray[np.bool_], NDArray[np.int64]]:
+    """Which operations of ``code`` are fixed (no operand depends on a pose
+    coordinate: slots ``[0, k)`` and ``[first_pose, first_const)``), and the row
+    count before each row of the others."""
+    on_pose = np.zeros(slots, dtype=bool)
+    on_pose[:k] = True
+    on_pose[first_pose:first_const] = True
+    fixed = np.zeros(code.shape[0], dtype=bool)
+    for row, (_, target, a, b) in enumerate(code):
+        fixed[row] = not (on_pose[a] or on_pose[b])
+        on_pose[target] = not fixed[row]
+    return fixed, np.concatenate([[0], np.cumsum(~fixed)]).astype(np.int64)
+
+
+def hoisted(prog: Program) -> Program:
+    """``prog`` with its operations on the pose and constants alone (the 3-RRR's
+    ``B - A``, in every tape) taken out: :func:`pose_values` computes them once per
+    box (and at its centre), and the values the other operations read become
+    derived inputs of the pose, after ``prog``'s. The same operations on the same
+    operands: the same bounds, with fewer operations per piece. ``prog`` itself
+    where it has none, or no more than two per value the others read.
+
+    Examples
+    --------
+    >>> from moveability.mechanisms import expressions as ex
+    >>> cos = traced(ex.cos, "cos")
+    >>> p = program([trace(lambda x, q: (2.0 * x + 1.0) * (x - 3.0) * cos(q), 1)])
+    >>> h = hoisted(p)
+    >>> p.code.shape[0], h.code.shape[0], h.hoist[2].size
+    (5, 1, 1)
+    >>> lo, hi = np.array([[0.0], [1.0]]), np.array([[0.5], [3.0]])
+    >>> box = np.array([0, 1])
+    >>> q = (np.array([0.1, 0.2]), np.array([0.3, 0.4]))
+    >>> extra = derived_values(p, Interval(*q))
+    >>> a, b = (
+    ...     isolate_level(g, lo, hi, box, q, extra, np.zeros(2, dtype=np.int64), 8, True)
+    ...     for g in (p, h)
+    ... )
+    >>> all(np.array_equal(u, v) for u, v in zip(a, b))
+    True
+    """
+    k = prog.k
+    first_pose = k + 1 + len(prog.derived)
+    first_const = first_pose + len(prog.pose_derived)
+    n_const = prog.const_lo.size
+    first_temp = first_const + n_const
+    pose = np.zeros(prog.slots, dtype=bool)
+    pose[:k] = True
+    pose[first_pose:first_temp] = True
+    on_pose = np.zeros(prog.code.shape[0], dtype=bool)
+    for row, (_, target, a, b) in enumerate(prog.code):
+        on_pose[row] = pose[a] and pose[b]
+        pose[target] = on_pose[row]
+    if not on_pose.any():
+        return prog
+    rest = prog.code[~on_pose]
+    read = set(rest[:, 2:].ravel().tolist()) | set(prog.outs.tolist())
+    needed = np.array(sorted(s for s in read if s >= first_temp and pose[s]), dtype=np.int64)
+    if on_pose.sum() <= 2 * needed.size:
+        # each value taken out is copied into every piece's registers: not worth it
+        # for an operation or two (2 * x in the custom five-bar's dF/dx)
+        return prog
+    new_const = first_const + needed.size
+    mapping = np.full(prog.slots, -1, dtype=np.int64)
+    mapping[:first_const] = np.arange(first_const)
+    mapping[needed] = first_const + np.arange(needed.size)
+    mapping[first_const:first_temp] = new_const + np.arange(n_const)
+    mapping[rest[:, 1]] = new_const + n_const + np.arange(rest.shape[0])
+    code = rest.copy()
+    code[:, 1:] = mapping[rest[:, 1:]]
+    assert (code >= 0).all()
+    slots = new_const + n_const + rest.shape[0]
+    before = np.concatenate([[0], np.cumsum(~on_pose)]).astype(np.int64)
+    ranges = np.ascontiguousarray(before[prog.ranges])
+    fixed, before_v = _fixed_split(code, k, first_pose, new_const, slots)
+    return Program(
+        k=k,
+        derived=prog.derived,
+        pose_derived=prog.pose_derived,
+        const_lo=prog.const_lo,
+        const_hi=prog.const_hi,
+        code=np.ascontiguousarray(code),
+        ranges=ranges,
+        outs=np.ascontiguousarray(mapping[prog.outs]),
+        slots=slots,
+        fixed=np.ascontiguousarray(code[fixed]).reshape(-1, 4),
+        fixed_slots=np.ascontiguousarray(code[fixed, 1]),
+        varying=np.ascontiguousarray(code[~fixed]).reshape(-1, 4),
+        varying_ranges=np.ascontiguousarray(before_v[ranges]),
+        hoist=(prog, np.ascontiguousarray(prog.code[on_pose]).reshape(-1, 4), needed),
+    )
+
+
+@kernel
+def _pose_ops(
+    code: NDArray[np.int64],
+    const_lo: Array,
+    const_hi: Array,
+    k: int,
+    slots: int,
+    first_pose: int,
+    lo: Array,
+    hi: Array,
+    d_lo: Array,
+    d_hi: Array,
+    needed: NDArray[np.int64],
+) -> tuple[Array, Array]:  # pragma: no cover - compiled
+    """The operations ``code`` on the pose alone over each box ``[lo[i], hi[i]]``
+    (its derived inputs ``d[:, i]``): the values of the slots ``needed``."""
+    n = lo.shape[0]
+    block = _BLOCK
+    r_lo = np.empty((slots, block))
+    r_hi = np.empty((slots, block))
+    first_const = first_pose + d_lo.shape[0]
+    for c in range(const_lo.size):
+        for e in range(block):
+            r_lo[first_const + c, e] = const_lo[c]
+            r_hi[first_const + c, e] = const_hi[c]
+    out_lo = np.empty((needed.size, n))
+    out_hi = np.empty((needed.size, n))
+    for start in range(0, n, block):
+        m = min(block, n - start)
+        for j in range(k):
+            for e in range(m):
+                r_lo[j, e] = lo[start + e, j]
+                r_hi[j, e] = hi[start + e, j]
+        for x in range(d_lo.shape[0]):
+            for e in range(m):
+                r_lo[first_pose + x, e] = d_lo[x, start + e]
+                r_hi[first_pose + x, e] = d_hi[x, start + e]
+        _ops(code, r_lo, r_hi, m)
+        for s in range(needed.size):
+            for e in range(m):
+                out_lo[s, start + e] = r_lo[needed[s], e]
+                out_hi[s, start + e] = r_hi[needed[s], e]
+    return out_lo, out_hi
 
 
 def derived_values(prog: Program, q: Interval) -> tuple[Array, Array]:
@@ -941,20 +1078,45 @@ def pose_values(prog: Program, lo: Array, hi: Array) -> tuple[Array, Array, Arra
     """
     lo_c = np.ascontiguousarray(lo, dtype=np.float64)
     hi_c = np.ascontiguousarray(hi, dtype=np.float64)
+    if prog.hoist is not None:
+        # the derived inputs of the program it comes from, then the values of the
+        # operations taken out, over the boxes and at their centres
+        base, code, needed = prog.hoist
+        values = pose_values(base, lo, hi)
+        centre = 0.5 * (lo_c + hi_c)
+        first_pose = base.k + 1 + len(base.derived)
+        out = []
+        for x_lo, x_hi, d_lo, d_hi in ((lo_c, hi_c, *values[:2]), (centre, centre, *values[2:])):
+            with np.errstate(all="ignore"):
+                h_lo, h_hi = _pose_ops(
+                    code, base.const_lo, base.const_hi, base.k, base.slots, first_pose,
+                    x_lo, x_hi, np.ascontiguousarray(d_lo), np.ascontiguousarray(d_hi), needed,
+                )  # fmt: skip
+            out += [np.concatenate([d_lo, h_lo]), np.concatenate([d_hi, h_hi])]
+        return out[0], out[1], out[2], out[3]
     centre = 0.5 * (lo_c + hi_c)
+    box = pose_box_values(prog, lo, hi)
     with np.errstate(all="ignore"):
-        memo = _ROWS.get()
-        if memo is None:
-            box = _pose_derived_values(prog.pose_derived, lo_c, hi_c)
-        else:
-            rows = [_rows_values(memo, f, a, lo, hi, lo_c, hi_c) for f, a in prog.pose_derived]
-            box = (
-                np.array([r[0] for r in rows]).reshape(-1, lo_c.shape[0]),
-                np.array([r[1] for r in rows]).reshape(-1, lo_c.shape[0]),
-            )
         # (the centres as points: one sine and one cosine each, the same bounds)
         mid = _values(prog.pose_derived, _Coords(centre, centre, True))
     return box[0], box[1], mid[0], mid[1]
+
+
+def pose_box_values(prog: Program, lo: Array, hi: Array) -> tuple[Array, Array]:
+    """The first two arrays of :func:`pose_values`: the derived inputs of pose
+    coordinates of ``prog`` over each box ``[lo, hi]``, shape ``(d, n)``
+    (remembered within :func:`remembered_boxes`)."""
+    lo_c = np.ascontiguousarray(lo, dtype=np.float64)
+    hi_c = np.ascontiguousarray(hi, dtype=np.float64)
+    with np.errstate(all="ignore"):
+        memo = _ROWS.get()
+        if memo is None:
+            return _pose_derived_values(prog.pose_derived, lo_c, hi_c)
+        rows = [_rows_values(memo, f, a, lo, hi, lo_c, hi_c) for f, a in prog.pose_derived]
+    return (
+        np.array([r[0] for r in rows]).reshape(-1, lo_c.shape[0]),
+        np.array([r[1] for r in rows]).reshape(-1, lo_c.shape[0]),
+    )
 
 
 @kernel(inline=True)
@@ -1081,6 +1243,12 @@ def _isolate_level(
     q_next = 0
     near_rows = np.empty(block, dtype=np.int64)
     near_qis = np.empty(block, dtype=np.int64)
+    # each box's mean-value offsets, computed at its first use
+    off_lo = np.empty((n_box, max(k, 1)))
+    off_hi = np.empty((n_box, max(k, 1)))
+    off_done = np.zeros(n_box, dtype=np.bool_)
+    mv_lo = np.empty(block)
+    mv_hi = np.empty(block)
     for start in range(0, m, block):
         n = min(block, m - start)
         # the natural enclosure of F over box x piece
@@ -1146,20 +1314,34 @@ def _isolate_level(
                 r_lo[first_pose + x, t] = centre_lo[x, b]
                 r_hi[first_pose + x, t] = centre_hi[x, b]
         _ops(f_code, r_lo, r_hi, c)
+        # the mean-value form, each offset widened by an ulp of its bounds (the
+        # pieces side by side: each one's sum over j in order)
+        for t in range(c):
+            b = rows[near[t]]
+            if not off_done[b]:
+                for j in range(k):
+                    centre = 0.5 * (lo[b, j] + hi[b, j])
+                    o_lo = lo[b, j] - centre
+                    o_hi = hi[b, j] - centre
+                    off_lo[b, j] = np.nextafter(
+                        o_lo if (o_lo < 0.0 or o_lo != o_lo) else 0.0, -np.inf
+                    )
+                    off_hi[b, j] = np.nextafter(
+                        o_hi if (o_hi > 0.0 or o_hi != o_hi) else 0.0, np.inf
+                    )
+                off_done[b] = True
+            mv_lo[t] = r_lo[out_f, t]
+            mv_hi[t] = r_hi[out_f, t]
+        for j in range(k):
+            for t in range(c):
+                b = rows[near[t]]
+                p_lo, p_hi = interval_mul(dj_lo[j, t], dj_hi[j, t], off_lo[b, j], off_hi[b, j])
+                mv_lo[t], mv_hi[t] = interval_add(mv_lo[t], mv_hi[t], p_lo, p_hi)
         for t in range(c):
             e = near[t]
             b = rows[e]
-            # the mean-value form, each offset widened by an ulp of its bounds
-            m_lo = r_lo[out_f, t]
-            m_hi = r_hi[out_f, t]
-            for j in range(k):
-                centre = 0.5 * (lo[b, j] + hi[b, j])
-                o_lo = lo[b, j] - centre
-                o_hi = hi[b, j] - centre
-                o_lo = np.nextafter(o_lo if (o_lo < 0.0 or o_lo != o_lo) else 0.0, -np.inf)
-                o_hi = np.nextafter(o_hi if (o_hi > 0.0 or o_hi != o_hi) else 0.0, np.inf)
-                p_lo, p_hi = interval_mul(dj_lo[j, t], dj_hi[j, t], o_lo, o_hi)
-                m_lo, m_hi = interval_add(m_lo, m_hi, p_lo, p_hi)
+            m_lo = mv_lo[t]
+            m_hi = mv_hi[t]
             m_lo = -np.inf if m_lo != m_lo else m_lo
             m_hi = np.inf if m_hi != m_hi else m_hi
             f_lo = max(nat_lo[e], m_lo)

@@ -56,10 +56,11 @@ class _Taped:
     which :class:`ConstraintLeg` runs over many boxes in one compiled loop with the
     bounds of the interpreted path."""
 
-    def __init__(self, make: Callable[[Any, Any], Function]) -> None:
+    def __init__(self, make: Callable[[Any, Any], Function], k: int = 3) -> None:
         self._plain = make(cos, sin)
         self._traceable = make(_TRACED_COS, _TRACED_SIN)
         self._tape: tp.Tape | None = None
+        self._k = k
         self.__doc__ = self._plain.__doc__
 
     def __call__(self, *args: Any) -> Any:
@@ -69,8 +70,15 @@ class _Taped:
     def tape(self) -> tp.Tape:
         """The traced tape (built on first use)."""
         if self._tape is None:
-            self._tape = tp.trace(self._traceable, 3)
+            self._tape = tp.trace(self._traceable, self._k)
         return self._tape
+
+    @property
+    def float_tape(self) -> tp.Tape:
+        """The operations the function performs on float arrays, in order: those of
+        :attr:`tape` (the same Python code; its constants are Python floats, operated
+        on as floats in both, and ``** 2`` of a float array is its square)."""
+        return self.tape
 
 
 _TRACED_COS, _TRACED_SIN = tp.traced(cos, "cos"), tp.traced(sin, "sin")
