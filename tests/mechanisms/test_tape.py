@@ -10,6 +10,8 @@ the tape cannot record (a division, sqrt of a computed value) have no tape.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 import sympy
@@ -275,20 +277,13 @@ def test_three_rrr_compiled_isolation_matches_the_interpreted_one(source, monkey
                 assert same(tp.run(g.tape, lo, hi, box, q), interpreted(g, lo, hi, box, q))
 
 
-@pytest.mark.parametrize("source", ["default", "examples/three-rrr.toml"])
-def test_three_rrr_compiled_fold_matches_the_interpreted_one(source, monkeypatch) -> None:
-    """The fold certificates of the 3-RRR's legs (``ConstraintLeg._fold``: one
-    kernel on the tapes and the float tape of F, ``_fold_kernels.fold``) equal
-    those of ``_fold_interpreted`` on every call ``reach`` makes, bit for bit,
-    over boxes of every kind (points, thin and wide ones, across -pi / pi, the
-    whole turn) and boxes about the leg's outer and inner folds (``|B - A| =
-    l1 + l2`` and ``|l1 - l2|``), many of them folds, some fold-connected."""
+def reach_both_folds(leg, lo, hi, monkeypatch) -> tuple[Any, list[tuple[np.ndarray, np.ndarray]]]:
+    """``leg.reach(lo, hi)`` with every ``ConstraintLeg._fold`` call checked bit for
+    bit against ``_fold_interpreted``, and with no compiled fold at all (the same
+    statuses and fold connectivity asserted): the former, and the certificates of
+    its ``_fold`` calls."""
     from moveability.mechanisms.constraint_leg import ConstraintLeg
-    from moveability.mechanisms.three_rrr import ThreeRRR
 
-    mechanism = ThreeRRR.default() if source == "default" else from_spec(load_spec(source))
-    rng = np.random.default_rng(5 if source == "default" else 6)
-    low, high = (np.asarray(b, dtype=float) for b in mechanism.bounds)
     seen: list[tuple[np.ndarray, np.ndarray]] = []
     compiled_fold = ConstraintLeg._fold
 
@@ -300,6 +295,31 @@ def test_three_rrr_compiled_fold_matches_the_interpreted_one(source, monkeypatch
         seen.append(got)
         return got
 
+    with monkeypatch.context() as m:
+        m.setattr(ConstraintLeg, "_fold", both)
+        compiled = leg.reach(lo, hi)
+    with monkeypatch.context() as m:
+        m.setattr(ConstraintLeg, "_fold_programs", lambda self: None)
+        plain = leg.reach(lo, hi)
+    assert (compiled.status == plain.status).all()
+    assert (compiled.fold_connected == plain.fold_connected).all()
+    return compiled, seen
+
+
+@pytest.mark.parametrize("source", ["default", "examples/three-rrr.toml"])
+def test_three_rrr_compiled_fold_matches_the_interpreted_one(source, monkeypatch) -> None:
+    """The fold certificates of the 3-RRR's legs (``ConstraintLeg._fold``: one
+    kernel on the tapes and the float tape of F, ``_fold_kernels.fold``) equal
+    those of ``_fold_interpreted`` on every call ``reach`` makes, bit for bit,
+    over boxes of every kind (points, thin and wide ones, across -pi / pi, the
+    whole turn) and boxes about the leg's outer and inner folds (``|B - A| =
+    l1 + l2`` and ``|l1 - l2|``), many of them folds, some fold-connected."""
+    from moveability.mechanisms.three_rrr import ThreeRRR
+
+    mechanism = ThreeRRR.default() if source == "default" else from_spec(load_spec(source))
+    rng = np.random.default_rng(5 if source == "default" else 6)
+    low, high = (np.asarray(b, dtype=float) for b in mechanism.bounds)
+    seen: list[tuple[np.ndarray, np.ndarray]] = []
     for i, leg in enumerate(mechanism.legs):
         lo, hi = rrr_boxes(rng, low, high, 600)
         # poses whose B - A is on a fold circle, and boxes about them
@@ -319,14 +339,8 @@ def test_three_rrr_compiled_fold_matches_the_interpreted_one(source, monkeypatch
         lo = np.concatenate([lo, centre - half])
         hi = np.concatenate([hi, centre + half])
         assert leg._fold_programs() is not None
-        with monkeypatch.context() as m:
-            m.setattr(ConstraintLeg, "_fold", both)
-            compiled = leg.reach(lo, hi)
-        with monkeypatch.context() as m:
-            m.setattr(ConstraintLeg, "_fold_programs", lambda self: None)
-            plain = leg.reach(lo, hi)
-        assert (compiled.status == plain.status).all()
-        assert (compiled.fold_connected == plain.fold_connected).all()
+        compiled, calls = reach_both_folds(leg, lo, hi, monkeypatch)
+        seen.extend(calls)
         assert (compiled.status == 2).sum() > 50  # (the RR legs' folds are convex)
         assert compiled.fold_connected.sum() > 20
     assert sum(int(s[1].sum()) for s in seen) > 60
@@ -386,8 +400,6 @@ def test_compiled_fold_of_convex_and_concave_folds(sign, monkeypatch) -> None:
     """``_fold`` compiled and interpreted on a leg whose folds are convex (F at a
     minimum), or concave (-F): the same certificates, bit for bit, over boxes about
     its fold circles (points, thin and wide, across -pi / pi)."""
-    from moveability.mechanisms.constraint_leg import ConstraintLeg
-
     leg = signed_leg(sign)
     rng = np.random.default_rng(8)
     n = 1500
@@ -400,25 +412,7 @@ def test_compiled_fold_of_convex_and_concave_folds(sign, monkeypatch) -> None:
     centre = np.column_stack([x, y, phi])
     half = rng.choice([0.0, 1e-3, 0.01, 0.1, 0.5], size=(n, 1)) * np.array([1.0, 1.0, 0.3])
     lo, hi = centre - half, centre + half
-    seen = []
-    compiled_fold = ConstraintLeg._fold
-
-    def both(self, lo, hi, runs, boxes, r, ends=None):
-        got = compiled_fold(self, lo, hi, runs, boxes, r, ends)
-        want = self._fold_interpreted(lo, hi, runs, boxes, r)
-        assert got[0].dtype == want[0].dtype and np.array_equal(got[0], want[0])
-        assert got[1].dtype == want[1].dtype and np.array_equal(got[1], want[1])
-        seen.append(got)
-        return got
-
-    with monkeypatch.context() as m:
-        m.setattr(ConstraintLeg, "_fold", both)
-        compiled = leg.reach(lo, hi)
-    with monkeypatch.context() as m:
-        m.setattr(ConstraintLeg, "_fold_programs", lambda self: None)
-        plain = leg.reach(lo, hi)
-    assert (compiled.status == plain.status).all()
-    assert (compiled.fold_connected == plain.fold_connected).all()
+    compiled, seen = reach_both_folds(leg, lo, hi, monkeypatch)
     fold = 2 if sign > 0 else 3
     assert (compiled.status == fold).sum() > 100 and compiled.fold_connected.sum() > 50
     convexity = np.concatenate([s[0] for s in seen])

@@ -149,6 +149,41 @@ def _fill(
 
 
 @kernel(inline=True)
+def _pieces(
+    code: NDArray[np.int64],
+    r_lo: Array,
+    r_hi: Array,
+    t: int,
+    p_local: NDArray[np.int64],
+    use: NDArray[np.bool_],
+    needed: NDArray[np.int64],
+    pv_lo: Array,
+    pv_hi: Array,
+    k: int,
+    a: Array,
+    z: Array,
+    qd_lo: Array,
+    qd_hi: Array,
+    cols: NDArray[np.int64],
+) -> tuple[int, int]:  # pragma: no cover - compiled
+    """The next block of pieces from ``t`` on whose box ``p_local[t]`` has ``use``:
+    each filled (:func:`_fill`: joint ``[a[t], z[t]]``, its derived inputs
+    ``qd[:, t]``) in a column, its piece in ``cols``, the operations ``code`` run
+    over them. Returns their count and the next piece."""
+    c = 0
+    while t < p_local.size and c < r_lo.shape[1]:
+        i = p_local[t]
+        if use[i]:
+            _fill(r_lo, r_hi, c, needed, pv_lo, pv_hi, i, k, a[t], z[t], qd_lo, qd_hi, t)
+            cols[c] = t
+            c += 1
+        t += 1
+    if c > 0:
+        _ops(code, r_lo, r_hi, c)
+    return c, t
+
+
+@kernel(inline=True)
 def _corner(
     lo: Array, hi: Array, corner: NDArray[np.int64], out: Array
 ) -> None:  # pragma: no cover
@@ -166,6 +201,72 @@ def _at_corner(
     for x in range(cd.shape[1]):
         for i in range(cd.shape[2]):
             out[x, i] = cd[corner[i], x, i]
+
+
+@kernel(inline=True)
+def _reached(
+    code: NDArray[np.int64],
+    r_lo: Array,
+    r_hi: Array,
+    p_local: NDArray[np.int64],
+    use: NDArray[np.bool_],
+    needed: NDArray[np.int64],
+    pv_lo: Array,
+    pv_hi: Array,
+    k: int,
+    q_mid: Array,
+    md_lo: Array,
+    md_hi: Array,
+    cols: NDArray[np.int64],
+    s2: Array,
+    out_f: int,
+    reach: NDArray[np.bool_],
+) -> None:  # pragma: no cover - compiled
+    """``reach[i] = True`` where ``G = s2 F < 0`` at the middle of some piece of box
+    ``i`` (with ``use[i]``), the pose slots ``needed`` of ``F`` in ``pv``."""
+    t = 0
+    while t < p_local.size:
+        c, t = _pieces(
+            code, r_lo, r_hi, t, p_local, use, needed, pv_lo, pv_hi, k, q_mid, q_mid,
+            md_lo, md_hi, cols,
+        )  # fmt: skip
+        for e in range(c):
+            i = p_local[cols[e]]
+            g_hi = r_hi[out_f, e] if s2[i] > 0 else -r_lo[out_f, e]
+            if g_hi < 0.0:
+                reach[i] = True
+
+
+@kernel(inline=True)
+def _corner_contexts(
+    code: NDArray[np.int64],
+    needed: NDArray[np.int64],
+    r_lo: Array,
+    r_hi: Array,
+    k: int,
+    first_pose: int,
+    lo: Array,
+    hi: Array,
+    corner: NDArray[np.int64],
+    cd_lo: Array,
+    cd_hi: Array,
+    use: NDArray[np.bool_],
+    idx: NDArray[np.int64],
+    point: Array,
+    point_d_lo: Array,
+    point_d_hi: Array,
+    pv_lo: Array,
+    pv_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """:func:`_contexts` at the corner ``corner[i]`` of each box ``i`` (its derived
+    inputs ``cd[corner[i], :, i]``), the corners in ``point``, ``point_d``."""
+    _corner(lo, hi, corner, point)
+    _at_corner(cd_lo, corner, point_d_lo)
+    _at_corner(cd_hi, corner, point_d_hi)
+    _contexts(
+        code, needed, r_lo, r_hi, k, first_pose, point, point, point_d_lo, point_d_hi, use, idx,
+        pv_lo, pv_hi,
+    )  # fmt: skip
 
 
 @kernel
@@ -252,17 +353,10 @@ def _fold(
     concave = np.ones(n_b, dtype=np.bool_)
     t = 0
     while t < n_p:
-        c = 0
-        while t < n_p and c < block:
-            i = p_local[t]
-            if use[i]:
-                _fill(r_lo, r_hi, c, d_need, pv_lo, pv_hi, i, k, q_lo[t], q_hi[t], qd_lo, qd_hi, t)
-                cols[c] = t
-                c += 1
-            t += 1
-        if c == 0:
-            continue
-        _ops(d_rest, r_lo, r_hi, c)
+        c, t = _pieces(
+            d_rest, r_lo, r_hi, t, p_local, use, d_need, pv_lo, pv_hi, k, q_lo, q_hi,
+            qd_lo, qd_hi, cols,
+        )  # fmt: skip
         for e in range(c):
             u = cols[e]
             i = p_local[u]
@@ -377,59 +471,30 @@ def _fold(
     point_d_hi = np.empty((cd_lo.shape[1], n_b))
     pv_lo = np.empty((f_need.size, n_b))
     pv_hi = np.empty((f_need.size, n_b))
-    _corner(lo, hi, best_in, point)
-    _at_corner(cd_lo, best_in, point_d_lo)
-    _at_corner(cd_hi, best_in, point_d_hi)
-    _contexts(
-        f_pose, f_need, r_lo, r_hi, k, first_pose, point, point, point_d_lo, point_d_hi, ok, idx,
-        pv_lo, pv_hi,
+    _corner_contexts(
+        f_pose, f_need, r_lo, r_hi, k, first_pose, lo, hi, best_in, cd_lo, cd_hi, ok, idx,
+        point, point_d_lo, point_d_hi, pv_lo, pv_hi,
     )  # fmt: skip
     reach = np.zeros(n_b, dtype=np.bool_)
-    t = 0
-    while t < n_p:
-        c = 0
-        while t < n_p and c < block:
-            i = p_local[t]
-            if ok[i]:
-                _fill(
-                    r_lo, r_hi, c, f_need, pv_lo, pv_hi, i, k, q_mid[t], q_mid[t], md_lo, md_hi, t
-                )
-                cols[c] = t
-                c += 1
-            t += 1
-        if c == 0:
-            continue
-        _ops(f_rest, r_lo, r_hi, c)
-        for e in range(c):
-            i = p_local[cols[e]]
-            g_hi = r_hi[out_f, e] if s2[i] > 0 else -r_lo[out_f, e]
-            if g_hi < 0.0:
-                reach[i] = True
+    _reached(
+        f_rest, r_lo, r_hi, p_local, ok, f_need, pv_lo, pv_hi, k, q_mid, md_lo, md_hi, cols, s2,
+        out_f, reach,
+    )  # fmt: skip
     for i in range(n_b):
         ok[i] = ok[i] and reach[i]
 
     # unreachable: G > 0 on every piece, at the corner best_out
-    _corner(lo, hi, best_out, point)
-    _at_corner(cd_lo, best_out, point_d_lo)
-    _at_corner(cd_hi, best_out, point_d_hi)
-    _contexts(
-        f_pose, f_need, r_lo, r_hi, k, first_pose, point, point, point_d_lo, point_d_hi, ok, idx,
-        pv_lo, pv_hi,
+    _corner_contexts(
+        f_pose, f_need, r_lo, r_hi, k, first_pose, lo, hi, best_out, cd_lo, cd_hi, ok, idx,
+        point, point_d_lo, point_d_hi, pv_lo, pv_hi,
     )  # fmt: skip
     out = np.ones(n_b, dtype=np.bool_)
     t = 0
     while t < n_p:
-        c = 0
-        while t < n_p and c < block:
-            i = p_local[t]
-            if ok[i]:
-                _fill(r_lo, r_hi, c, f_need, pv_lo, pv_hi, i, k, q_lo[t], q_hi[t], qd_lo, qd_hi, t)
-                cols[c] = t
-                c += 1
-            t += 1
-        if c == 0:
-            continue
-        _ops(f_rest, r_lo, r_hi, c)
+        c, t = _pieces(
+            f_rest, r_lo, r_hi, t, p_local, ok, f_need, pv_lo, pv_hi, k, q_lo, q_hi,
+            qd_lo, qd_hi, cols,
+        )  # fmt: skip
         for e in range(c):
             i = p_local[cols[e]]
             g_lo = r_lo[out_f, e] if s2[i] > 0 else -r_hi[out_f, e]
@@ -448,17 +513,10 @@ def _fold(
     down = np.ones((n_b, max(k, 1)), dtype=np.bool_)
     t = 0
     while t < n_p:
-        c = 0
-        while t < n_p and c < block:
-            i = p_local[t]
-            if ok[i]:
-                _fill(r_lo, r_hi, c, x_need, xv_lo, xv_hi, i, k, q_lo[t], q_hi[t], qd_lo, qd_hi, t)
-                cols[c] = t
-                c += 1
-            t += 1
-        if c == 0:
-            continue
-        _ops(x_rest, r_lo, r_hi, c)
+        c, t = _pieces(
+            x_rest, r_lo, r_hi, t, p_local, ok, x_need, xv_lo, xv_hi, k, q_lo, q_hi,
+            qd_lo, qd_hi, cols,
+        )  # fmt: skip
         for e in range(c):
             i = p_local[cols[e]]
             for j in range(k):
@@ -488,27 +546,10 @@ def _fold(
                 f_pose, f_need, r_lo, r_hi, k, first_pose, face_lo, face_hi,
                 fd_lo[2 * j + side], fd_hi[2 * j + side], use, idx, pv_lo, pv_hi,
             )  # fmt: skip
-            t = 0
-            while t < n_p:
-                c = 0
-                while t < n_p and c < block:
-                    i = p_local[t]
-                    if use[i]:
-                        _fill(
-                            r_lo, r_hi, c, f_need, pv_lo, pv_hi, i, k, q_mid[t], q_mid[t],
-                            md_lo, md_hi, t,
-                        )  # fmt: skip
-                        cols[c] = t
-                        c += 1
-                    t += 1
-                if c == 0:
-                    continue
-                _ops(f_rest, r_lo, r_hi, c)
-                for e in range(c):
-                    i = p_local[cols[e]]
-                    g_hi = r_hi[out_f, e] if s2[i] > 0 else -r_lo[out_f, e]
-                    if g_hi < 0.0:
-                        connected[i] = True
+            _reached(
+                f_rest, r_lo, r_hi, p_local, use, f_need, pv_lo, pv_hi, k, q_mid, md_lo, md_hi,
+                cols, s2, out_f, connected,
+            )  # fmt: skip
     convexity = np.zeros(n_b, dtype=np.int8)
     for i in range(n_b):
         if ok[i]:

@@ -726,21 +726,10 @@ class ConstraintLeg:
             return self._fold_interpreted(lo, hi, runs, boxes, r)
         from ._fold_kernels import fold
 
-        n_b = boxes.size
-        if ends is None:
-            ends = (
-                self._box_eval(self.f, lo, hi, boxes, ex.points(runs.start[r])),
-                self._box_eval(self.f, lo, hi, boxes, runs.end[r]),
-            )
-        f_start, f_end = ends
-        may_convex = (f_start.lo > 0) & (f_end.lo > 0)
-        may_concave = (f_start.hi < 0) & (f_end.hi < 0)
-        if not (may_convex | may_concave).any():
-            return np.zeros(n_b, dtype=np.int8), np.zeros(n_b, dtype=bool)
-        sel = np.isin(runs.run_of_piece, r[may_convex | may_concave])
-        p_idx = np.flatnonzero(sel)
-        local = np.full(runs.box.size, -1, dtype=np.intp)
-        local[r] = np.arange(n_b)
+        found = self._fold_pieces(lo, hi, runs, boxes, r, ends)
+        if found is None:
+            return np.zeros(boxes.size, dtype=np.int8), np.zeros(boxes.size, dtype=bool)
+        may_convex, may_concave, p_idx, local = found
         pc = runs.pieces
         prog, fprog, split = progs
         b_lo, b_hi = tape.pose_box_values(prog, lo, hi)
@@ -757,6 +746,36 @@ class ConstraintLeg:
             pc.finite[p_idx],
         )
 
+    def _fold_pieces(
+        self,
+        lo: Array,
+        hi: Array,
+        runs: _Runs,
+        boxes: NDArray[np.intp],
+        r: NDArray[np.intp],
+        ends: tuple[Interval, Interval] | None,
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.intp], NDArray[np.intp]] | None:
+        """The first step of the fold certificates of boxes with one run ``r``: ``F``
+        positive (may be convex) or negative (concave) at both ends of each box's run
+        (``ends``: ``F`` there, when known), the pieces of the runs that may pass
+        (no certificate else) and each run's box index; None if no box may pass."""
+        # G = s2 F positive at both ends of Q: F of one definite sign at both ends
+        if ends is None:
+            ends = (
+                self._box_eval(self.f, lo, hi, boxes, ex.points(runs.start[r])),
+                self._box_eval(self.f, lo, hi, boxes, runs.end[r]),
+            )
+        f_start, f_end = ends
+        may_convex = (f_start.lo > 0) & (f_end.lo > 0)
+        may_concave = (f_start.hi < 0) & (f_end.hi < 0)
+        if not (may_convex | may_concave).any():
+            return None
+        sel = np.isin(runs.run_of_piece, r[may_convex | may_concave])
+        p_idx = np.flatnonzero(sel)
+        local = np.full(runs.box.size, -1, dtype=np.intp)
+        local[r] = np.arange(boxes.size)
+        return may_convex, may_concave, p_idx, local
+
     def _fold_interpreted(
         self, lo: Array, hi: Array, runs: _Runs, boxes: NDArray[np.intp], r: NDArray[np.intp]
     ) -> tuple[NDArray[np.int8], NDArray[np.bool_]]:
@@ -764,18 +783,10 @@ class ConstraintLeg:
         k = lo.shape[1]
         n_b = boxes.size
         pc = runs.pieces
-        # G = s2 F positive at both ends of Q: F of one definite sign at both ends
-        f_start = self._box_eval(self.f, lo, hi, boxes, ex.points(runs.start[r]))
-        f_end = self._box_eval(self.f, lo, hi, boxes, runs.end[r])
-        may_convex = (f_start.lo > 0) & (f_end.lo > 0)
-        may_concave = (f_start.hi < 0) & (f_end.hi < 0)
-        if not (may_convex | may_concave).any():
+        found = self._fold_pieces(lo, hi, runs, boxes, r, None)
+        if found is None:
             return np.zeros(n_b, dtype=np.int8), np.zeros(n_b, dtype=bool)
-        # pieces of these runs (of the boxes whose ends may pass: no certificate else)
-        sel = np.isin(runs.run_of_piece, r[may_convex | may_concave])
-        p_idx = np.flatnonzero(sel)
-        local = np.full(runs.box.size, -1, dtype=np.intp)
-        local[r] = np.arange(n_b)
+        may_convex, may_concave, p_idx, local = found
         p_local = local[runs.run_of_piece[p_idx]]
         p_box = pc.box[p_idx]
         q = Interval(pc.lo[p_idx], pc.hi[p_idx])
