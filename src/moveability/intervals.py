@@ -36,6 +36,7 @@ __all__ = [
     "add_into",
     "arccos",
     "arctan2",
+    "atan_bounds",
     "bound_above",
     "cos",
     "exp",
@@ -68,6 +69,7 @@ __all__ = [
     "slot_add_c",
     "slot_c_sub",
     "slot_det3",
+    "slot_div",
     "slot_mul",
     "slot_mul_c",
     "slot_negate",
@@ -79,6 +81,7 @@ __all__ = [
     "sub_into",
     "tan",
     "trig_bounds",
+    "trig_ends",
     "trig_one",
     "widen_down",
     "widen_up",
@@ -678,15 +681,14 @@ def may_contain_angle(x: Interval, phase: float | NDArray[np.float64]) -> NDArra
 
 
 @kernel(inline=True)
-def trig_one(
-    a: float, b: float, sine: bool, rel: float, tiny: float
+def trig_ends(
+    fa: float, fb: float, a: float, b: float, sine: bool, rel: float, tiny: float
 ) -> tuple[float, float]:  # pragma: no cover - compiled
-    """One element of :func:`_trig_bounds`: the range of ``sin`` (or ``cos``) over
-    ``[a, b]``, for compiled code (inlined: the same floats)."""
+    """One element of :func:`_trig_bounds` from the values ``fa``, ``fb`` of ``sin``
+    (or ``cos``) at the ends of ``[a, b]``, for compiled code (inlined: the same
+    floats)."""
     top = 0.5 * np.pi if sine else 0.0
     bottom = -0.5 * np.pi if sine else np.pi
-    fa = np.sin(a) if sine else np.cos(a)
-    fb = np.sin(b) if sine else np.cos(b)
     if fa != fa or fb != fb:
         low = np.nan
         high = np.nan
@@ -703,6 +705,17 @@ def trig_one(
     else:
         high = _above(high, rel, tiny, False)
     return (low if low != low else max(low, -1.0)), (high if high != high else min(high, 1.0))
+
+
+@kernel(inline=True)
+def trig_one(
+    a: float, b: float, sine: bool, rel: float, tiny: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """One element of :func:`_trig_bounds`: the range of ``sin`` (or ``cos``) over
+    ``[a, b]``, for compiled code (inlined: the same floats)."""
+    fa = np.sin(a) if sine else np.cos(a)
+    fb = np.sin(b) if sine else np.cos(b)
+    return trig_ends(fa, fb, a, b, sine, rel, tiny)
 
 
 @kernel
@@ -761,26 +774,8 @@ def point_sin_cos(a: float) -> tuple[float, float, float, float]:  # pragma: no 
     c_lo = 0.0
     c_hi = 0.0
     for sine in (True, False):
-        top = 0.5 * np.pi if sine else 0.0
-        bottom = -0.5 * np.pi if sine else np.pi
         fa = np.sin(a) if sine else np.cos(a)
-        if fa != fa:
-            low = np.nan
-            high = np.nan
-        else:
-            low = fa
-            high = fa
-        wide = a - a >= _TWO_PI
-        if wide or _holds_angle(a, a, bottom):
-            low = -1.0
-        else:
-            low = _below(low, rel, tiny, False)
-        if wide or _holds_angle(a, a, top):
-            high = 1.0
-        else:
-            high = _above(high, rel, tiny, False)
-        low = low if low != low else max(low, -1.0)
-        high = high if high != high else min(high, 1.0)
+        low, high = trig_ends(fa, fa, a, a, sine, rel, tiny)
         if sine:
             s_lo = low
             s_hi = high
@@ -875,6 +870,24 @@ def interval_sqrt(lo: float, hi: float) -> tuple[float, float]:  # pragma: no co
     low = 0.0 if lo <= 0 else _down(np.sqrt(nan_max(lo, 0.0)), False)
     high = np.nan if hi < 0 else bound_above(np.sqrt(nan_max(hi, 0.0)))
     return nan_max(low, 0.0), high
+
+
+@kernel
+def slot_div(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
+    """Slot ``o`` = slot ``a`` / slot ``b`` (``Interval.__truediv__``), element by
+    element by :func:`interval_div` (``o`` may be ``a`` or ``b``)."""
+    for j in range(w):
+        o_lo_j, o_hi_j = interval_div(lo[a, j], hi[a, j], lo[b, j], hi[b, j])
+        lo[o, j], hi[o, j] = o_lo_j, o_hi_j
+
+
+@kernel(inline=True)
+def atan_bounds(lo: float, hi: float, cut: bool) -> tuple[float, float]:  # pragma: no cover
+    """One element of :func:`arctan2` from the least and greatest arctan2 of the
+    corners: widened, the whole ``[-pi, pi]`` where the box meets the cut."""
+    low = -_PI_UP if cut else lib_below(lo)
+    high = _PI_UP if cut else lib_above(hi)
+    return nan_max(low, -_PI_UP), nan_min(high, _PI_UP)
 
 
 def arccos(x: IntervalLike) -> Interval:

@@ -45,6 +45,7 @@ from numpy.typing import NDArray
 from ..compiled import kernel
 from ..intervals import (
     Slot,
+    atan_bounds,
     interval_add,
     interval_div,
     interval_mul,
@@ -59,6 +60,7 @@ from ..intervals import (
     slot_add_c,
     slot_c_sub,
     slot_det3,
+    slot_div,
     slot_mul,
     slot_mul_c,
     slot_negate,
@@ -171,15 +173,6 @@ def _g_boxes(
     return g_lo, g_hi, t_lo, s_lo, s_hi
 
 
-@kernel(inline=True)
-def _atan_bounds(lo: float, hi: float, cut: bool) -> tuple[float, float]:  # pragma: no cover
-    """``intervals.arctan2`` from the least and greatest arctan2 of the corners:
-    widened, the whole ``[-pi, pi]`` where the box meets the cut."""
-    low = -_PI_UP if cut else lib_below(lo)
-    high = _PI_UP if cut else lib_above(hi)
-    return nan_max(low, -_PI_UP), nan_min(high, _PI_UP)
-
-
 # ------------------------------------------------------------------ passes
 # det A works chunk by chunk (as mechanisms/_rpr_kernels.py does): each quantity
 # of a chunk's boxes is a row (a "slot") of two scratch arrays ``lo``, ``hi``
@@ -188,15 +181,6 @@ def _atan_bounds(lo: float, hi: float, cut: bool) -> tuple[float, float]:  # pra
 
 #: boxes per chunk: the scratch (80 slots, 2 x 8 bytes a box each) stays in cache
 _CHUNK = 128
-
-
-@kernel
-def _div_into(lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int) -> None:  # pragma: no cover
-    """Slot ``o`` = slot ``a`` / slot ``b`` (``Interval.__truediv__``)."""
-    a_lo, a_hi, b_lo, b_hi = lo[a, :w], hi[a, :w], lo[b, :w], hi[b, :w]
-    o_lo, o_hi = lo[o, :w], hi[o, :w]
-    for j in range(w):
-        o_lo[j], o_hi[j] = interval_div(a_lo[j], a_hi[j], b_lo[j], b_hi[j])
 
 
 # the slots of a chunk: the box (x, y, z) and its centre; the cosine and sine of
@@ -422,12 +406,12 @@ def centre_angles(
             out[2, k, j] = nan_max(lib_below(acos[0, k, j]), 0.0)
             out[3, k, j] = nan_min(lib_above(acos[1, k, j]), _PI_UP)
             c_k, s_k = cs[k, j], sn[k, j]
-            r_lo, r_hi = _atan_bounds(ref[k, j], ref[k, j], (c_k <= 0) & (s_k <= 0) & (s_k >= 0))
+            r_lo, r_hi = atan_bounds(ref[k, j], ref[k, j], (c_k <= 0) & (s_k <= 0) & (s_k >= 0))
             c0, c1, c2, c3 = corners[0, k, j], corners[1, k, j], corners[2, k, j], corners[3, k, j]
             least = nan_min(nan_min(nan_min(c0, c1), c2), c3)
             most = nan_max(nan_max(nan_max(c0, c1), c2), c3)
             cut = (turned[0, k, j] <= 0) & (turned[2, k, j] <= 0) & (turned[3, k, j] >= 0)
-            t_lo, t_hi = _atan_bounds(least, most, cut)
+            t_lo, t_hi = atan_bounds(least, most, cut)
             out[0, k, j], out[1, k, j] = interval_add(r_lo, r_hi, t_lo, t_hi)
 
 
@@ -450,6 +434,140 @@ def centre_trig(centre: Array, out: Array) -> None:  # pragma: no cover - compil
                 else:
                     m_lo[k, j], m_hi[k, j] = interval_sub(d_lo, d_hi, al_lo, al_hi)
         out[branch] = _trig_of(m_lo, m_hi)
+
+
+# the slots of the mean-value form beyond those of det_a_prepare: for each branch b,
+# from _BRANCH + _PER_BRANCH b, the cosines and sines of the legs' angles (leg k's at
+# + 2 k, + 2 k + 1), the rows of A over the box (leg k's at + 6 + 3 k), la cos and
+# la sin (leg k's at + 15 + 2 k, + 1), and the rows moved along each axis (leg k's
+# along axis a at + 21 + 9 k + 3 a); then the boxes' widths about their centres
+_BRANCH, _PER_BRANCH = _SLOTS, 48
+_B_TRIG, _B_ROWS, _B_ARM_TRIG, _B_MOVED = 0, 6, 15, 21
+_WIDTHS = _BRANCH + 2 * _PER_BRANCH  # 3 slots
+_ALL_SLOTS = _WIDTHS + 3
+
+
+@kernel
+def _moved_rows(
+    lo: Array,
+    hi: Array,
+    x: Slot,
+    base: Slot,
+    legs: Array,
+    one_lo: float,
+    one_hi: float,
+    zero_lo: float,
+    zero_hi: float,
+    w: int,
+) -> None:  # pragma: no cover - compiled
+    """One branch's part of the mean-value form (the legs on that branch, its slots
+    from ``base``, the cosines and sines of the angles loaded): the rows of A over
+    the box, the joints' gradients and each leg's row moved along each axis, for
+    :func:`mean_value_bounds` and :func:`mean_value_all`."""
+    trig, rows, arm_trig = base + _B_TRIG, base + _B_ROWS, base + _B_ARM_TRIG
+    grad, den, sp, t = np.int64(_GRAD), np.int64(_DEN), np.int64(_S), np.int64(_TEMP)
+    _rows(lo, hi, x, trig, legs, rows, arm_trig, w)
+    for k in range(3):
+        leg = legs[k]
+        slot_mul_c(lo, hi, x, leg[UX_LO], leg[UX_HI], t, w)
+        slot_mul_c(lo, hi, x + 1, leg[UY_LO], leg[UY_HI], t + 1, w)
+        slot_add(lo, hi, t, t + 1, sp, w)
+        slot_add_c(lo, hi, sp, leg[OFF_LO], leg[OFF_HI], sp, w)
+        slot_mul(lo, hi, sp, trig + 2 * k + 1, t, w)
+        slot_mul(lo, hi, x + 2, trig + 2 * k, t + 1, w)
+        slot_add(lo, hi, t, t + 1, den, w)
+        slot_mul_c(lo, hi, den, leg[ARM], leg[ARM], den, w)
+        for e in range(3):
+            slot_div(lo, hi, rows + 3 * k + e, den, grad + 3 * k + e, w)
+            slot_negate(lo, hi, grad + 3 * k + e, grad + 3 * k + e, w)
+    for axis in range(3):
+        for i in range(3):
+            leg = legs[i]
+            moved = base + _B_MOVED + 9 * i + 3 * axis
+            for j in range(3):
+                if j < 2:
+                    slot_mul_c(
+                        lo, hi, arm_trig + 2 * i + 1,
+                        leg[UX_LO] if j == 0 else leg[UY_LO],
+                        leg[UX_HI] if j == 0 else leg[UY_HI],
+                        moved + j, w,
+                    )  # fmt: skip
+                    slot_mul(lo, hi, moved + j, grad + 3 * i + axis, moved + j, w)
+                else:
+                    slot_mul(lo, hi, arm_trig + 2 * i, grad + 3 * i + axis, moved + j, w)
+                for ax in range(3):
+                    unit = j == ax and ax == axis
+                    slot_add_c(
+                        lo, hi, moved + j,
+                        one_lo if unit else zero_lo, one_hi if unit else zero_hi,
+                        moved + j, w,
+                    )  # fmt: skip
+
+
+@kernel
+def _centre_widths(
+    s_lo: Array, s_hi: Array, lo: Array, hi: Array, s: int, w: int
+) -> None:  # pragma: no cover - compiled
+    """The centres ``m`` of the chunk's boxes from ``s`` into the slots from ``_M``
+    and the widths ``x - m`` into those from ``_WIDTHS`` (the box loaded)."""
+    mx, x, widths = np.int64(_M), np.int64(_X), np.int64(_WIDTHS)
+    for j in range(w):
+        for axis in range(3):
+            m = 0.5 * lo[s + j, axis] + 0.5 * hi[s + j, axis]
+            s_lo[mx + axis, j] = m
+            s_hi[mx + axis, j] = m
+    for axis in range(3):
+        slot_sub(s_lo, s_hi, x + axis, mx + axis, widths + axis, w)
+
+
+@kernel
+def _form(
+    s_lo: Array,
+    s_hi: Array,
+    centre_trig: Array,
+    branches: NDArray[np.int64],
+    bases: NDArray[np.int64],
+    legs: Array,
+    s: int,
+    w: int,
+    matrix: NDArray[np.int64],
+) -> None:  # pragma: no cover - compiled
+    """The mean-value form ``D(m) + sum_j dD/dx_j (x_j - m_j)`` of the chunk's
+    boxes from ``s`` into slot ``_TOT``, leg ``k`` on branch ``branches[k]``: the
+    centres and widths in their slots (:func:`_centre_widths`), leg ``k``'s rows
+    over the box and moved along each axis in the block from ``bases[k]``
+    (:func:`_moved_rows`). ``D(m)`` as ``Delta._det_a_plain`` at the centre, with
+    the cosines and sines of the legs' angles there from ``centre_trig``;
+    ``dD/dx_j`` as ``Mechanism.det_a_rate`` (``base._det_rate_span``'s order)."""
+    mx, mtrig = np.int64(_M), np.int64(_MTRIG)
+    mrows, marm_trig = np.int64(_MROWS), np.int64(_MARM_TRIG)
+    tot, rate, term = np.int64(_TOT), np.int64(_RATE), np.int64(_TERM)
+    t, widths = np.int64(_TEMP), np.int64(_WIDTHS)
+    for j in range(w):
+        for k in range(3):
+            b = branches[k]
+            s_lo[mtrig + 2 * k, j] = centre_trig[b, 0, k, s + j]
+            s_hi[mtrig + 2 * k, j] = centre_trig[b, 1, k, s + j]
+            s_lo[mtrig + 2 * k + 1, j] = centre_trig[b, 2, k, s + j]
+            s_hi[mtrig + 2 * k + 1, j] = centre_trig[b, 3, k, s + j]
+    # D(m)
+    _rows(s_lo, s_hi, mx, mtrig, legs, mrows, marm_trig, w)
+    _plain_rest(s_lo, s_hi, mx, mrows, marm_trig, legs, tot, w)
+    for axis in range(3):
+        for i in range(3):
+            # det A with row i moved along the axis
+            for k in range(3):
+                for j in range(3):
+                    matrix[3 * k + j] = bases[k] + _B_ROWS + 3 * k + j
+            for j in range(3):
+                matrix[3 * i + j] = bases[i] + _B_MOVED + 9 * i + 3 * axis + j
+            if i == 0:
+                slot_det3(s_lo, s_hi, matrix, rate, t, w)
+            else:
+                slot_det3(s_lo, s_hi, matrix, term, t, w)
+                slot_add(s_lo, s_hi, rate, term, rate, w)
+        slot_mul(s_lo, s_hi, rate, widths + axis, term, w)
+        slot_add(s_lo, s_hi, tot, term, tot, w)
 
 
 @kernel
@@ -480,157 +598,22 @@ def mean_value_bounds(
     # velocity (a unit vector): 1 * 1, and 0 * 1, 1 * 0 or 0 * 0
     one_lo, one_hi = interval_mul(1.0, 1.0, 1.0, 1.0)
     zero_lo, zero_hi = interval_mul(0.0, 0.0, 1.0, 1.0)
-
     w = _CHUNK
-    s_lo, s_hi = np.empty((_SLOTS, w)), np.empty((_SLOTS, w))
-    x, mx, trig, mtrig = np.int64(_X), np.int64(_M), np.int64(_TRIG), np.int64(_MTRIG)
-    rows, mrows = np.int64(_ROWS), np.int64(_MROWS)
-    arm_trig, marm_trig, grad = np.int64(_ARM_TRIG), np.int64(_MARM_TRIG), np.int64(_GRAD)
-    tot, rate, term, width = np.int64(_TOT), np.int64(_RATE), np.int64(_TERM), np.int64(_WIDTH)
-    den, sp, t = np.int64(_DEN), np.int64(_S), np.int64(_TEMP)
-    moved = np.int64(_TEMP + 2)  # 3 slots
+    s_lo, s_hi = np.empty((_ALL_SLOTS, w)), np.empty((_ALL_SLOTS, w))
+    # the first branch's block holds each leg on its own branch
+    base = np.int64(_BRANCH)
+    bases = np.full(3, _BRANCH, dtype=np.int64)
     matrix = np.empty(9, dtype=np.int64)
+    tot = np.int64(_TOT)
     for s in range(0, n, w):
         size = min(w, n - s)
-        _load(s_lo, s_hi, lo, hi, box_trig, s, size, x, trig)
-        for j in range(size):
-            for axis in range(3):
-                m = 0.5 * lo[s + j, axis] + 0.5 * hi[s + j, axis]
-                s_lo[mx + axis, j] = m
-                s_hi[mx + axis, j] = m
-            for k in range(3):
-                b = branches[k]
-                s_lo[mtrig + 2 * k, j] = centre_trig[b, 0, k, s + j]
-                s_hi[mtrig + 2 * k, j] = centre_trig[b, 1, k, s + j]
-                s_lo[mtrig + 2 * k + 1, j] = centre_trig[b, 2, k, s + j]
-                s_hi[mtrig + 2 * k + 1, j] = centre_trig[b, 3, k, s + j]
-        # D(m)
-        _rows(s_lo, s_hi, mx, mtrig, legs, mrows, marm_trig, size)
-        _plain_rest(s_lo, s_hi, mx, mrows, marm_trig, legs, tot, size)
-        # the rows over the box, the joints' gradients -row / (la (s sin + z cos))
-        _rows(s_lo, s_hi, x, trig, legs, rows, arm_trig, size)
-        for k in range(3):
-            leg = legs[k]
-            # s = x u_x + y u_y + (r - R), as _plane
-            slot_mul_c(s_lo, s_hi, x, leg[UX_LO], leg[UX_HI], t, size)
-            slot_mul_c(s_lo, s_hi, x + 1, leg[UY_LO], leg[UY_HI], t + 1, size)
-            slot_add(s_lo, s_hi, t, t + 1, sp, size)
-            slot_add_c(s_lo, s_hi, sp, leg[OFF_LO], leg[OFF_HI], sp, size)
-            slot_mul(s_lo, s_hi, sp, trig + 2 * k + 1, t, size)
-            slot_mul(s_lo, s_hi, x + 2, trig + 2 * k, t + 1, size)
-            slot_add(s_lo, s_hi, t, t + 1, den, size)
-            slot_mul_c(s_lo, s_hi, den, leg[ARM], leg[ARM], den, size)
-            for e in range(3):
-                _div_into(s_lo, s_hi, rows + 3 * k + e, den, grad + 3 * k + e, size)
-                slot_negate(s_lo, s_hi, grad + 3 * k + e, grad + 3 * k + e, size)
-        for axis in range(3):
-            for i in range(3):
-                leg = legs[i]
-                # row i moved: d row / dq * rate + sum_ax d row / dx_ax * v_ax, with
-                # d row / dq = (la sin u_x, la sin u_y, la cos)
-                for j in range(3):
-                    if j < 2:
-                        slot_mul_c(
-                            s_lo, s_hi, arm_trig + 2 * i + 1,
-                            leg[UX_LO] if j == 0 else leg[UY_LO],
-                            leg[UX_HI] if j == 0 else leg[UY_HI],
-                            moved + j, size,
-                        )  # fmt: skip
-                        slot_mul(s_lo, s_hi, moved + j, grad + 3 * i + axis, moved + j, size)
-                    else:
-                        slot_mul(s_lo, s_hi, arm_trig + 2 * i, grad + 3 * i + axis, moved + j, size)
-                    for ax in range(3):
-                        unit = j == ax and ax == axis
-                        slot_add_c(
-                            s_lo, s_hi, moved + j,
-                            one_lo if unit else zero_lo, one_hi if unit else zero_hi,
-                            moved + j, size,
-                        )  # fmt: skip
-                for r in range(9):
-                    matrix[r] = rows + r
-                for j in range(3):
-                    matrix[3 * i + j] = moved + j
-                if i == 0:
-                    slot_det3(s_lo, s_hi, matrix, rate, t, size)
-                else:
-                    slot_det3(s_lo, s_hi, matrix, term, t, size)
-                    slot_add(s_lo, s_hi, rate, term, rate, size)
-            slot_sub(s_lo, s_hi, x + axis, mx + axis, width, size)
-            slot_mul(s_lo, s_hi, rate, width, term, size)
-            slot_add(s_lo, s_hi, tot, term, tot, size)
-        for j in range(size):
-            t_lo, t_hi = s_lo[tot, j], s_hi[tot, j]
-            if np.isfinite(t_lo) and np.isfinite(t_hi):
-                out_lo[s + j] = nan_max(out_lo[s + j], t_lo)
-                out_hi[s + j] = nan_min(out_hi[s + j], t_hi)
-
-
-# the slots of mean_value_all beyond those of mean_value_bounds: for each branch b,
-# from _BRANCH + _PER_BRANCH b, the cosines and sines of the legs' angles (leg k's at
-# + 2 k, + 2 k + 1), the rows of A over the box (leg k's at + 6 + 3 k), la cos and
-# la sin (leg k's at + 15 + 2 k, + 1), and the rows moved along each axis (leg k's
-# along axis a at + 21 + 9 k + 3 a); then the boxes' widths about their centres
-_BRANCH, _PER_BRANCH = _SLOTS, 48
-_B_TRIG, _B_ROWS, _B_ARM_TRIG, _B_MOVED = 0, 6, 15, 21
-_WIDTHS = _BRANCH + 2 * _PER_BRANCH  # 3 slots
-_ALL_SLOTS = _WIDTHS + 3
-
-
-@kernel
-def _moved_rows(
-    lo: Array,
-    hi: Array,
-    x: Slot,
-    base: Slot,
-    legs: Array,
-    one_lo: float,
-    one_hi: float,
-    zero_lo: float,
-    zero_hi: float,
-    w: int,
-) -> None:  # pragma: no cover - compiled
-    """One branch's part of :func:`mean_value_bounds` (the legs on that branch, its
-    slots from ``base``, the cosines and sines of the angles loaded): the rows of A
-    over the box, the joints' gradients and each leg's row moved along each axis,
-    by the same operations in the same order."""
-    trig, rows, arm_trig = base + _B_TRIG, base + _B_ROWS, base + _B_ARM_TRIG
-    grad, den, sp, t = np.int64(_GRAD), np.int64(_DEN), np.int64(_S), np.int64(_TEMP)
-    _rows(lo, hi, x, trig, legs, rows, arm_trig, w)
-    for k in range(3):
-        leg = legs[k]
-        slot_mul_c(lo, hi, x, leg[UX_LO], leg[UX_HI], t, w)
-        slot_mul_c(lo, hi, x + 1, leg[UY_LO], leg[UY_HI], t + 1, w)
-        slot_add(lo, hi, t, t + 1, sp, w)
-        slot_add_c(lo, hi, sp, leg[OFF_LO], leg[OFF_HI], sp, w)
-        slot_mul(lo, hi, sp, trig + 2 * k + 1, t, w)
-        slot_mul(lo, hi, x + 2, trig + 2 * k, t + 1, w)
-        slot_add(lo, hi, t, t + 1, den, w)
-        slot_mul_c(lo, hi, den, leg[ARM], leg[ARM], den, w)
-        for e in range(3):
-            _div_into(lo, hi, rows + 3 * k + e, den, grad + 3 * k + e, w)
-            slot_negate(lo, hi, grad + 3 * k + e, grad + 3 * k + e, w)
-    for axis in range(3):
-        for i in range(3):
-            leg = legs[i]
-            moved = base + _B_MOVED + 9 * i + 3 * axis
-            for j in range(3):
-                if j < 2:
-                    slot_mul_c(
-                        lo, hi, arm_trig + 2 * i + 1,
-                        leg[UX_LO] if j == 0 else leg[UY_LO],
-                        leg[UX_HI] if j == 0 else leg[UY_HI],
-                        moved + j, w,
-                    )  # fmt: skip
-                    slot_mul(lo, hi, moved + j, grad + 3 * i + axis, moved + j, w)
-                else:
-                    slot_mul(lo, hi, arm_trig + 2 * i, grad + 3 * i + axis, moved + j, w)
-                for ax in range(3):
-                    unit = j == ax and ax == axis
-                    slot_add_c(
-                        lo, hi, moved + j,
-                        one_lo if unit else zero_lo, one_hi if unit else zero_hi,
-                        moved + j, w,
-                    )  # fmt: skip
+        _load(s_lo, s_hi, lo, hi, box_trig, s, size, np.int64(_X), base + _B_TRIG)
+        _moved_rows(s_lo, s_hi, np.int64(_X), base, legs, one_lo, one_hi, zero_lo, zero_hi, size)
+        _centre_widths(s_lo, s_hi, lo, hi, s, size)
+        _form(s_lo, s_hi, centre_trig, branches, bases, legs, s, size, matrix)
+        intersect_finite(
+            s_lo[tot, :size], s_hi[tot, :size], out_lo[s : s + size], out_hi[s : s + size]
+        )
 
 
 @kernel
@@ -664,11 +647,8 @@ def mean_value_all(
         box_trig[b] = _trig_of(a_lo[b], a_hi[b])
     w = _CHUNK
     s_lo, s_hi = np.empty((_ALL_SLOTS, w)), np.empty((_ALL_SLOTS, w))
-    x, mx, mtrig = np.int64(_X), np.int64(_M), np.int64(_MTRIG)
-    mrows, marm_trig = np.int64(_MROWS), np.int64(_MARM_TRIG)
-    tot, rate, term = np.int64(_TOT), np.int64(_RATE), np.int64(_TERM)
-    t = np.int64(_TEMP)
-    widths = np.int64(_WIDTHS)
+    x, tot = np.int64(_X), np.int64(_TOT)
+    bases = np.empty(3, dtype=np.int64)
     matrix = np.empty(9, dtype=np.int64)
     for s in range(0, n, w):
         size = min(w, n - s)
@@ -676,40 +656,11 @@ def mean_value_all(
             base = np.int64(_BRANCH + _PER_BRANCH * b)
             _load(s_lo, s_hi, lo, hi, box_trig[b], s, size, x, base + _B_TRIG)
             _moved_rows(s_lo, s_hi, x, base, legs, one_lo, one_hi, zero_lo, zero_hi, size)
-        for j in range(size):
-            for axis in range(3):
-                m = 0.5 * lo[s + j, axis] + 0.5 * hi[s + j, axis]
-                s_lo[mx + axis, j] = m
-                s_hi[mx + axis, j] = m
-        for axis in range(3):
-            slot_sub(s_lo, s_hi, x + axis, mx + axis, widths + axis, size)
+        _centre_widths(s_lo, s_hi, lo, hi, s, size)
         for p in range(postures.shape[0]):
-            for j in range(size):
-                for k in range(3):
-                    b = postures[p, k]
-                    s_lo[mtrig + 2 * k, j] = centre_trig[b, 0, k, s + j]
-                    s_hi[mtrig + 2 * k, j] = centre_trig[b, 1, k, s + j]
-                    s_lo[mtrig + 2 * k + 1, j] = centre_trig[b, 2, k, s + j]
-                    s_hi[mtrig + 2 * k + 1, j] = centre_trig[b, 3, k, s + j]
-            # D(m)
-            _rows(s_lo, s_hi, mx, mtrig, legs, mrows, marm_trig, size)
-            _plain_rest(s_lo, s_hi, mx, mrows, marm_trig, legs, tot, size)
-            for axis in range(3):
-                for i in range(3):
-                    for k in range(3):
-                        base = _BRANCH + _PER_BRANCH * postures[p, k]
-                        for j in range(3):
-                            matrix[3 * k + j] = base + _B_ROWS + 3 * k + j
-                    base = _BRANCH + _PER_BRANCH * postures[p, i]
-                    for j in range(3):
-                        matrix[3 * i + j] = base + _B_MOVED + 9 * i + 3 * axis + j
-                    if i == 0:
-                        slot_det3(s_lo, s_hi, matrix, rate, t, size)
-                    else:
-                        slot_det3(s_lo, s_hi, matrix, term, t, size)
-                        slot_add(s_lo, s_hi, rate, term, rate, size)
-                slot_mul(s_lo, s_hi, rate, widths + axis, term, size)
-                slot_add(s_lo, s_hi, tot, term, tot, size)
+            for k in range(3):
+                bases[k] = _BRANCH + _PER_BRANCH * postures[p, k]
+            _form(s_lo, s_hi, centre_trig, postures[p], bases, legs, s, size, matrix)
             out_lo[p, s : s + size] = s_lo[tot, :size]
             out_hi[p, s : s + size] = s_hi[tot, :size]
 

@@ -2,8 +2,8 @@
 poses (``DeltaLeg.reach``), the joints' gradients (``DeltaLeg.joint_gradient``)
 and the flows across their folds (``DeltaLeg.fold_flow``).
 
-As in :mod:`._delta_kernels` (whose one-box helpers ``_plane``, ``_g_boxes``
-and ``_atan_bounds`` these kernels share), each kernel repeats the
+As in :mod:`._delta_kernels` (whose one-box helpers ``_plane`` and ``_g_boxes``
+these kernels share, with ``intervals.atan_bounds``), each kernel repeats the
 :class:`~moveability.intervals.Interval` operations of the reference kept in
 :class:`~.delta.DeltaLeg` (``_reach_intervals``, ``_joint_gradient_intervals``,
 ``_fold_flow_intervals``) box by box: the same operations on the same operands
@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 
 from ..compiled import kernel
 from ..intervals import (
+    atan_bounds,
     interval_add,
     interval_div,
     interval_mul,
@@ -64,7 +65,6 @@ from ._delta_kernels import (
     UX_LO,
     UY_HI,
     UY_LO,
-    _atan_bounds,
     _clip_mid,
     _g_boxes,
     _plane,
@@ -279,12 +279,12 @@ def reach_finish(
     the arccos ``acos`` (2, n) of alpha's arguments."""
     for j in range(cs.shape[0]):
         c, s = cs[j], sn[j]
-        r_lo, r_hi = _atan_bounds(ref[j], ref[j], (c <= 0) & (s <= 0) & (s >= 0))
+        r_lo, r_hi = atan_bounds(ref[j], ref[j], (c <= 0) & (s <= 0) & (s >= 0))
         c0, c1, c2, c3 = corners[0, j], corners[1, j], corners[2, j], corners[3, j]
         least = nan_min(nan_min(nan_min(c0, c1), c2), c3)
         most = nan_max(nan_max(nan_max(c0, c1), c2), c3)
         cut = (turned[0, j] <= 0) & (turned[2, j] <= 0) & (turned[3, j] >= 0)
-        t_lo, t_hi = _atan_bounds(least, most, cut)
+        t_lo, t_hi = atan_bounds(least, most, cut)
         d_lo, d_hi = interval_add(r_lo, r_hi, t_lo, t_hi)
         a_lo = nan_max(lib_below(acos[0, j]), 0.0)
         a_hi = nan_min(lib_above(acos[1, j]), _PI_UP)

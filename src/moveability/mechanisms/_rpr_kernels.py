@@ -343,6 +343,21 @@ def _det(
 
 
 @kernel
+def _scratch() -> tuple[
+    Array, Array, NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]
+]:  # pragma: no cover - compiled
+    """A chunk's scratch (``_SLOTS`` x ``_CHUNK``, the constants 1 and 0 set), the
+    slots of the rows over the box and at the centre as run-time integers (see
+    Slot), and room for a determinant's nine slots."""
+    s_lo, s_hi = np.empty((_SLOTS, _CHUNK)), np.empty((_SLOTS, _CHUNK))
+    s_lo[_ONE], s_hi[_ONE] = 1.0, 1.0
+    s_lo[_ZERO], s_hi[_ZERO] = 0.0, 0.0
+    rows = np.arange(_ROWS, _ROWS + 9, dtype=np.int64)
+    centre = np.arange(_MROWS, _MROWS + 9, dtype=np.int64)
+    return s_lo, s_hi, rows, centre, np.empty(9, dtype=np.int64)
+
+
+@kernel
 def det_a_bounds(
     lo: Array, hi: Array, trig: Array, legs: Array, out_lo: Array, out_hi: Array
 ) -> None:  # pragma: no cover - compiled
@@ -353,13 +368,7 @@ def det_a_bounds(
     c_j)``, where ``dD/dx_j`` is the sum of the three determinants with one row
     differentiated along ``x_j`` (leg 0's first)."""
     w = _CHUNK
-    s_lo, s_hi = np.empty((_SLOTS, w)), np.empty((_SLOTS, w))
-    s_lo[_ONE], s_hi[_ONE] = 1.0, 1.0
-    s_lo[_ZERO], s_hi[_ZERO] = 0.0, 0.0
-    # the slots as run-time integers (see Slot)
-    rows = np.arange(_ROWS, _ROWS + 9, dtype=np.int64)
-    centre = np.arange(_MROWS, _MROWS + 9, dtype=np.int64)
-    matrix = np.empty(9, dtype=np.int64)
+    s_lo, s_hi, rows, centre, matrix = _scratch()
     n = lo.shape[0]
     for s in range(0, n, w):
         size = min(w, n - s)
@@ -384,12 +393,7 @@ def pose_bounds(
     element by element), the legs' ``dx, dy`` (the first entries of their rows)
     shared. The same floats as those kernels, bit for bit."""
     w = _CHUNK
-    s_lo, s_hi = np.empty((_SLOTS, w)), np.empty((_SLOTS, w))
-    s_lo[_ONE], s_hi[_ONE] = 1.0, 1.0
-    s_lo[_ZERO], s_hi[_ZERO] = 0.0, 0.0
-    rows = np.arange(_ROWS, _ROWS + 9, dtype=np.int64)
-    centre = np.arange(_MROWS, _MROWS + 9, dtype=np.int64)
-    matrix = np.empty(9, dtype=np.int64)
+    s_lo, s_hi, rows, centre, matrix = _scratch()
     x, c, temp = np.int64(_X), np.int64(_C), np.int64(_TEMP)
     n = lo.shape[0]
     for s in range(0, n, w):

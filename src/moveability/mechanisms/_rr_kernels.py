@@ -28,7 +28,7 @@ so the Interval code's ``np.arccos`` and ``np.arctan2`` are called on the same
 arrays of arguments as there (and ``np.cos``, ``np.sin`` of a box's direction
 from its centre, for the same reason). The cosines and sines of angle
 enclosures are compiled in :mod:`moveability.intervals` already
-(``_trig_bounds``): :func:`_trig` repeats its steps.
+(``_trig_bounds``): :func:`_trig` takes its steps (``trig_ends``).
 
 A leg enters as the float array of ``RRLeg.constants`` (its entries are named
 below).
@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 from ..compiled import kernel
 from ..intervals import (
     Slot,
-    holds_angle,
+    atan_bounds,
     interval_add,
     interval_div,
     interval_mul,
@@ -51,17 +51,18 @@ from ..intervals import (
     interval_sub,
     lib_above,
     lib_below,
-    move_below,
     nan_max,
     nan_min,
     slot_add,
     slot_add_c,
     slot_c_sub,
+    slot_div,
     slot_mul,
     slot_mul_c,
     slot_sub,
     slot_sub_c,
     step_down,
+    trig_ends,
 )
 from ..types import Array
 
@@ -84,19 +85,13 @@ __all__ = [
 ) = range(23)  # fmt: skip
 
 # ------------------------------------------------------------------ rounding
-# The rounding steps are those of moveability.intervals (move_below, step_down,
-# holds_angle): the same floats as the Interval code.
+# The rounding steps are those of moveability.intervals (step_down, trig_ends):
+# the same floats as the Interval code.
 
 _PI_UP = float(np.nextafter(np.pi, np.inf))
-_TWO_PI = 2.0 * np.pi
-_MAX = float(np.finfo(np.float64).max)
-#: beyond this magnitude a widening away from zero gives the infinity
-_HUGE = _MAX / 2.0
 #: the smallest positive subnormal
 _TINY = 5e-324
-#: ``intervals._rel(1)`` and the widening of the library functions, ``_rel(4)``
-#: and 4 ulps of ``_TINY``
-_REL_1 = 2 * 2.0**-52
+#: the widening of the library functions, ``intervals._rel(4)`` and 4 ulps of ``_TINY``
 _LIB_REL = 5 * 2.0**-52
 _LIB_TINY = 4 * _TINY
 
@@ -114,27 +109,8 @@ def _trig_bound(
     fa: float, fb: float, a: float, b: float, sine: bool
 ) -> tuple[float, float]:  # pragma: no cover - compiled
     """One element of ``intervals._trig_bounds`` from the function's values ``fa``,
-    ``fb`` at the ends of ``[a, b]``."""
-    top = 0.5 * np.pi if sine else 0.0
-    bottom = -0.5 * np.pi if sine else np.pi
-    if fa != fa or fb != fb:
-        low = np.nan
-        high = np.nan
-    else:
-        low = min(fa, fb)
-        high = max(fa, fb)
-    wide = b - a >= _TWO_PI
-    if wide or holds_angle(a, b, bottom):
-        low = -1.0
-    else:
-        low = move_below(low, _LIB_REL, _LIB_TINY, False)
-    if wide or holds_angle(a, b, top):
-        high = 1.0
-    else:
-        high = -move_below(-high, _LIB_REL, _LIB_TINY, False)
-    out_lo = low if low != low else max(low, -1.0)
-    out_hi = high if high != high else min(high, 1.0)
-    return out_lo, out_hi
+    ``fb`` at the ends of ``[a, b]`` (``intervals.trig_ends``)."""
+    return trig_ends(fa, fb, a, b, sine, _LIB_REL, _LIB_TINY)
 
 
 @kernel
@@ -220,16 +196,6 @@ def _square_into(lo: Array, hi: Array, a: Slot, o: Slot, w: int) -> None:  # pra
 
 
 @kernel
-def _div_into(
-    lo: Array, hi: Array, a: Slot, b: Slot, o: Slot, w: int
-) -> None:  # pragma: no cover - compiled
-    """Slot ``o`` = slot ``a`` / slot ``b`` (``Interval.__truediv__``)."""
-    for j in range(w):
-        o_lo_j, o_hi_j = interval_div(lo[a, j], hi[a, j], lo[b, j], hi[b, j])
-        lo[o, j], hi[o, j] = o_lo_j, o_hi_j
-
-
-@kernel
 def _branch_form(
     lo: Array,
     hi: Array,
@@ -259,7 +225,7 @@ def _branch_form(
     slot_mul_c(lo, hi, rho, 2.0, 2.0, r2, w)
     lo[shift, :w] = leg[SHIFT_LO]
     hi[shift, :w] = leg[SHIFT_HI]
-    _div_into(lo, hi, shift, r2, omc, w)
+    slot_div(lo, hi, shift, r2, omc, w)
     slot_c_sub(lo, hi, 0.5, 0.5, omc, omc, w)
     # k: the square root of the range of g over rho (its ends, and its top where
     # rho may reach a^2 + b^2), over 2 rho
@@ -278,7 +244,7 @@ def _branch_form(
         ends_lo, ends_hi = nan_min(lo[u, j], lo[v, j]), nan_max(hi[u, j], hi[v, j])
         inside = (lo[rho, j] <= top) & (hi[rho, j] >= top)
         lo[k, j], hi[k, j] = interval_sqrt(ends_lo, nan_max(ends_hi, g_top) if inside else ends_hi)
-    _div_into(lo, hi, k, r2, k, w)
+    slot_div(lo, hi, k, r2, k, w)
     # (Q - O) x (P - O) and (P - O) . (P - Q)
     slot_sub_c(lo, hi, q, leg[BASE_X], leg[BASE_X], ox, w)
     slot_sub_c(lo, hi, q + 1, leg[BASE_Y], leg[BASE_Y], oy, w)
@@ -420,8 +386,8 @@ def _distance_g(
     _square_into(lo, hi, b, b, w)
     slot_add(lo, hi, a, b, rho2, w)
     _sqrt_into(lo, hi, rho2, r, w)
-    _div_into(lo, hi, r, np.int64(_LTWO_A), a, w)
-    _div_into(lo, hi, np.int64(_LK), r, b, w)
+    slot_div(lo, hi, r, np.int64(_LTWO_A), a, w)
+    slot_div(lo, hi, np.int64(_LK), r, b, w)
     slot_add(lo, hi, a, b, g, w)
 
 
@@ -549,17 +515,6 @@ _TWO_PI_LO = float(np.nextafter(2 * np.pi, 0.0))
 _TWO_PI_HI = float(np.nextafter(2 * np.pi, np.inf))
 
 
-@kernel(inline=True)
-def _atan_bounds(
-    lo: float, hi: float, cut: bool
-) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``intervals.arctan2`` from the least and greatest arctan2 of the corners:
-    widened, the whole ``[-pi, pi]`` where the box meets the cut."""
-    low = -_PI_UP if cut else lib_below(lo)
-    high = _PI_UP if cut else lib_above(hi)
-    return nan_max(low, -_PI_UP), nan_min(high, _PI_UP)
-
-
 @kernel
 def reach_finish(
     lo: Array,
@@ -589,12 +544,12 @@ def reach_finish(
         a_lo, a_hi = _alpha(acos[0, j], acos[1, j])
         # the direction: the centre's, plus that of the box turned back by it
         v = ref[j]
-        r_lo, r_hi = _atan_bounds(v, v, cs[j] <= 0 and sn[j] <= 0 and sn[j] >= 0)
+        r_lo, r_hi = atan_bounds(v, v, cs[j] <= 0 and sn[j] <= 0 and sn[j] >= 0)
         c0, c1, c2, c3 = corners[0, j], corners[1, j], corners[2, j], corners[3, j]
         m_lo = nan_min(nan_min(nan_min(c0, c1), c2), c3)
         m_hi = nan_max(nan_max(nan_max(c0, c1), c2), c3)
         cut = prep[2, j] <= 0 and prep[4, j] <= 0 and prep[5, j] >= 0
-        t_lo, t_hi = _atan_bounds(m_lo, m_hi, cut)
+        t_lo, t_hi = atan_bounds(m_lo, m_hi, cut)
         th_lo, th_hi = interval_add(r_lo, r_hi, t_lo, t_hi)
         out_lo[0, j], out_hi[0, j] = interval_add(th_lo, th_hi, a_lo, a_hi)
         out_lo[1, j], out_hi[1, j] = interval_sub(th_lo, th_hi, a_lo, a_hi)
@@ -641,7 +596,7 @@ def fold_terms_prepare(
         _square_into(s_lo, s_hi, np.int64(_LDY), b, size)
         slot_add(s_lo, s_hi, a, b, rho2, size)
         _sqrt_into(s_lo, s_hi, rho2, rho, size)
-        _div_into(s_lo, s_hi, np.int64(_LK), rho2, q, size)
+        slot_div(s_lo, s_hi, np.int64(_LK), rho2, q, size)
         slot_c_sub(s_lo, s_hi, leg[SLOPE_LO], leg[SLOPE_HI], q, slope, size)
         terms_lo[DX, s : s + size] = s_lo[_LDX, :size]
         terms_hi[DX, s : s + size] = s_hi[_LDX, :size]

@@ -74,7 +74,7 @@ from .base import (
     round_down,
     round_up,
 )
-from .rr_leg import flat_bounds
+from .rr_leg import flat_bounds, fold_terms_bounds
 
 #: the reach codes, in the order the kernels of :mod:`._delta_leg_kernels` take them
 _CODES = np.array([REGULAR, FOLD_OUTER, FOLD_INNER, REACH_OUT, REACH_UNKNOWN], dtype=np.uint8)
@@ -646,15 +646,14 @@ class DeltaLeg:
     def _fold_terms_compiled(self, lo: Array, hi: Array) -> tuple[Array, Array]:
         """The bounds of :meth:`_fold_terms`, (``N_TERMS``, n) each (see
         :func:`._delta_leg_kernels.fold_terms_prepare`)."""
-        n = lo.shape[0]
-        terms_lo, terms_hi = np.empty((leg_kernels.N_TERMS, n)), np.empty((leg_kernels.N_TERMS, n))
-        args = np.empty((2, n))
-        leg_kernels.fold_terms_prepare(lo, hi, self.constants, terms_lo, terms_hi, args)
-        acos = np.empty((2, n))
-        np.arccos(args[0], out=acos[0])
-        np.arccos(args[1], out=acos[1])
-        leg_kernels.fold_terms_finish(acos, terms_lo, terms_hi)
-        return terms_lo, terms_hi
+        return fold_terms_bounds(
+            leg_kernels.fold_terms_prepare,
+            leg_kernels.fold_terms_finish,
+            lo,
+            hi,
+            self.constants,
+            leg_kernels.N_TERMS,
+        )
 
     def _fold_flow_intervals(
         self,

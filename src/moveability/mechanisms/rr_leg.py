@@ -60,6 +60,23 @@ def flat_bounds(x: Interval, n: int) -> tuple[Array, Array] | None:
     )
 
 
+def fold_terms_bounds(
+    prepare: Any, finish: Any, lo: Array, hi: Array, constants: Array, n_terms: int
+) -> tuple[Array, Array]:
+    """The bounds of a leg's fold terms, (``n_terms``, n) each, by the compiled
+    ``prepare`` (``fold_terms_prepare`` of :mod:`._rr_kernels` or
+    :mod:`._delta_leg_kernels`), numpy's arc cosines of the two arguments it
+    leaves, and ``finish`` (its ``fold_terms_finish``)."""
+    n = lo.shape[0]
+    terms_lo, terms_hi, args = np.empty((n_terms, n)), np.empty((n_terms, n)), np.empty((2, n))
+    prepare(lo, hi, constants, terms_lo, terms_hi, args)
+    acos = np.empty((2, n))
+    np.arccos(args[0], out=acos[0])
+    np.arccos(args[1], out=acos[1])
+    finish(acos, terms_lo, terms_hi)
+    return terms_lo, terms_hi
+
+
 @dataclass(frozen=True)
 class RRLeg:
     """A revolute-revolute leg.
@@ -297,14 +314,9 @@ class RRLeg:
 
     def _fold_terms_compiled(self, lo: Array, hi: Array) -> tuple[Array, Array]:
         """The bounds of :meth:`_fold_terms` (but the sign), (5, n) each."""
-        n = lo.shape[0]
-        terms_lo, terms_hi, args = np.empty((5, n)), np.empty((5, n)), np.empty((2, n))
-        kernels.fold_terms_prepare(lo, hi, self.constants, terms_lo, terms_hi, args)
-        acos = np.empty((2, n))
-        np.arccos(args[0], out=acos[0])
-        np.arccos(args[1], out=acos[1])
-        kernels.fold_terms_finish(acos, terms_lo, terms_hi)
-        return terms_lo, terms_hi
+        return fold_terms_bounds(
+            kernels.fold_terms_prepare, kernels.fold_terms_finish, lo, hi, self.constants, 5
+        )
 
     def _fold_flow_intervals(
         self,
