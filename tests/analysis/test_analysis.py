@@ -384,8 +384,9 @@ def test_sub_node_bounds_are_the_joint_pieces():
 @pytest.mark.parametrize("seed", range(3))
 def test_possible_labels_of_both_signs_are_those_found_apart(seed):
     """The possible graph's components of both signs from one pass over the pairs
-    are those of each sign found alone (two postures, two slots, a posture pair)."""
-    from moveability.analysis.regions import _possible_labels, _possible_labels_both
+    are those of each sign's edges listed one by one and joined apart (two
+    postures, two slots, a posture pair)."""
+    from moveability.analysis.regions import _possible_labels_both
 
     rng = np.random.default_rng([seed, 43])
     n, n_post, slots, n_legs = 60, 2, 2, 2
@@ -409,11 +410,41 @@ def test_possible_labels_of_both_signs_are_those_found_apart(seed):
         pairs, alive, np.ascontiguousarray(has.transpose(2, 0, 1)), bounds, pq, same_leaf,
         taken, 1e-9,
     )  # fmt: skip
+
+    def sub(i, p, c):
+        return (i * n_post + p) * slots + c
+
+    def root(parent, u):
+        while parent[u] != u:
+            u = parent[u]
+        return u
+
+    def meet(i, p, ci, j, q, cj):
+        return all(
+            lo[leg, combo[ci, leg], i, p] <= hi[leg, combo[cj, leg], j, q] + 1e-9
+            and lo[leg, combo[cj, leg], j, q] <= hi[leg, combo[ci, leg], i, p] + 1e-9
+            for leg in range(n_legs)
+        )
+
     for s in range(2):
-        want, count = _possible_labels(
-            pairs, np.ascontiguousarray(alive[s]), has, lo, hi, combo, pq, same_leaf,
-            np.ascontiguousarray(taken[s]), 1e-9,
-        )  # fmt: skip
+        # the sign's edges one by one: touching leaves in one posture, then the
+        # posture pair within a leaf where same_leaf says so
+        ends = [(i, p, j, p) for i, j in pairs for p in range(n_post)]
+        ends += [(i, 0, i, 1) for i in range(n) if same_leaf[0, i]]
+        parent = list(range(n * n_post * slots))
+        for i, p, j, q in ends:
+            if not (alive[s, i, p] and alive[s, j, q]):
+                continue
+            for ci in range(slots):
+                for cj in range(slots):
+                    if has[p, ci, i] and has[q, cj, j] and meet(i, p, ci, j, q, cj):
+                        parent[root(parent, sub(i, p, ci))] = root(parent, sub(j, q, cj))
+        # labels numbered by first taken sub-node
+        want = np.full(len(parent), -1, dtype=np.int64)
+        first: dict[int, int] = {}
+        for u in np.flatnonzero(taken[s]):
+            want[u] = first.setdefault(root(parent, u), len(first))
+        count = len(first)
         np.testing.assert_array_equal(labels[s], want)
         assert counts[s] == count
         # neither everything nor nothing joined

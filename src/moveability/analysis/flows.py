@@ -831,7 +831,6 @@ def _propagate(
                     break
 
 
-
 @kernel(inline=True)
 def doubled(buffer: NDArray[np.int64], used: int) -> NDArray[np.int64]:  # pragma: no cover
     """A buffer twice as long as ``buffer`` with its first ``used`` entries (a
@@ -839,6 +838,7 @@ def doubled(buffer: NDArray[np.int64], used: int) -> NDArray[np.int64]:  # pragm
     grown = np.empty(2 * buffer.size, dtype=np.int64)
     grown[:used] = buffer[:used]
     return grown
+
 
 @kernel
 def _dependencies(
@@ -857,119 +857,21 @@ def _dependencies(
     NDArray[np.int64],
     NDArray[np.int64],
 ]:  # pragma: no cover - compiled
-    """What each waiting slot waits on, for :func:`attached_nodes`.
+    """What each waiting slot waits on, for :func:`attached_nodes`, for attachments
+    of the same nodes (``done`` (sets, n, P) and ``slot_done`` (sets, m, slots),
+    one of each per attachment) from one pass over the pairs.
 
     ``pairs[face_ptr[f]:face_ptr[f + 1]]`` are the leaves ``(a, b)`` with ``b``
     across ``a``'s face ``f``; ``node_row`` the row of each node (-1: none),
     ``open_faces`` (m, faces) those of each row's leaf on the edge of the box.
-    Returns ``per_face`` (faces, m, slots): the slots across face ``f`` a slot
-    may land in that are waiting; ``never`` (faces, m): faces that can never be
-    crossed (the box's edge, or a node across neither done nor listed); and
-    the triples (row, slot, face) waiting on each slot ``sub = row * slots +
-    slot`` across, as ``dep_*[dep_ptr[sub]:dep_ptr[sub + 1]]`` (by face, pair,
-    posture, own slot, then slot across)."""
-    m, slots = slot_done.shape
-    n_post = done.shape[1]
-    n_faces = face_ptr.size - 1
-    n_legs = spans.shape[2]
-    per_face = np.zeros((n_faces, m, slots), dtype=np.int64)
-    never = np.zeros((n_faces, m), dtype=np.bool_)
-    dep_ptr = np.zeros(m * slots + 1, dtype=np.int64)
-    fill = np.zeros(m * slots, dtype=np.int64)
-    # one pass over the pairs: the triples in the order met, each with the slot
-    # across it waits on; then placed by that slot (a counting sort, stable)
-    cap = max(1024, pairs.shape[0] // 4)
-    got_row = np.empty(cap, dtype=np.int64)
-    got_slot = np.empty(cap, dtype=np.int64)
-    got_face = np.empty(cap, dtype=np.int64)
-    got_sub = np.empty(cap, dtype=np.int64)
-    total = 0
-    for f in range(n_faces):
-        for e in range(face_ptr[f], face_ptr[f + 1]):
-            a, b = pairs[e, 0], pairs[e, 1]
-            for p in range(n_post):
-                ra, rb = node_row[a, p], node_row[b, p]
-                if ra < 0 or done[b, p]:
-                    continue
-                if rb < 0:
-                    # a node across that is neither done nor listed never attaches
-                    never[f, ra] = True
-                    continue
-                for ca in range(slots):
-                    if slot_done[ra, ca]:
-                        continue
-                    for cb in range(slots):
-                        if slot_done[rb, cb]:
-                            continue
-                        # their joint ranges meet
-                        meet = True
-                        for j in range(n_legs):
-                            if not (
-                                spans[ra, ca, j, 0] <= spans[rb, cb, j, 1] + _SPAN_TOL
-                                and spans[rb, cb, j, 0] <= spans[ra, ca, j, 1] + _SPAN_TOL
-                            ):
-                                meet = False
-                        if not meet:
-                            continue
-                        sub = rb * slots + cb
-                        per_face[f, ra, ca] += 1
-                        fill[sub] += 1
-                        if total == cap:
-                            cap *= 2
-                            got_row = doubled(got_row, total)
-                            got_slot = doubled(got_slot, total)
-                            got_face = doubled(got_face, total)
-                            got_sub = doubled(got_sub, total)
-                        got_row[total] = ra
-                        got_slot[total] = ca
-                        got_face[total] = f
-                        got_sub[total] = sub
-                        total += 1
-    for sub in range(m * slots):
-        dep_ptr[sub + 1] = dep_ptr[sub] + fill[sub]
-        fill[sub] = 0
-    dep_row = np.empty(total, dtype=np.int64)
-    dep_slot = np.empty(total, dtype=np.int64)
-    dep_face = np.empty(total, dtype=np.int64)
-    for t in range(total):
-        sub = got_sub[t]
-        at = dep_ptr[sub] + fill[sub]
-        dep_row[at] = got_row[t]
-        dep_slot[at] = got_slot[t]
-        dep_face[at] = got_face[t]
-        fill[sub] += 1
-    for f in range(n_faces):
-        for r in range(m):
-            # a face on the edge of the box can never be crossed
-            never[f, r] |= open_faces[r, f]
-    return per_face, never, dep_ptr, dep_row, dep_slot, dep_face
-
-
-@kernel
-def _dependencies_both(
-    pairs: NDArray[np.int64],
-    face_ptr: NDArray[np.int64],
-    node_row: NDArray[np.int64],
-    done: NDArray[np.bool_],
-    slot_done: NDArray[np.bool_],
-    spans: NDArray[np.float64],
-    open_faces: NDArray[np.bool_],
-) -> tuple[
-    NDArray[np.int64],
-    NDArray[np.bool_],
-    NDArray[np.int64],
-    NDArray[np.int64],
-    NDArray[np.int64],
-    NDArray[np.int64],
-]:  # pragma: no cover - compiled
-    """:func:`_dependencies` of two attachments of the same nodes (``done`` (2, n, P)
-    and ``slot_done`` (2, m, slots) for each) from one pass over the pairs.
-
-    Returns ``per_face`` (2, faces, m, slots), ``never`` (2, faces, m),
-    ``dep_ptr`` (2, m * slots + 1) and the triples of both, those of the
-    first first: attachment ``s`` waits on slot ``sub`` with the triples
-    ``dep_*[dep_ptr[s, sub]:dep_ptr[s, sub + 1]]``, in the order of
-    :func:`_dependencies`."""
+    Returns, for each attachment ``s``, ``per_face[s]`` (faces, m, slots): the
+    slots across face ``f`` a slot may land in that are waiting; ``never[s]``
+    (faces, m): faces that can never be crossed (the box's edge, or a node
+    across neither done nor listed); and the triples (row, slot, face) waiting
+    on each slot ``sub = row * slots + slot`` across, as
+    ``dep_*[dep_ptr[s, sub]:dep_ptr[s, sub + 1]]`` (those of all attachments in
+    one array, the first's first; each one's by face, pair, posture, own slot,
+    then slot across)."""
     n_sets, m, slots = slot_done.shape
     n_post = done.shape[2]
     n_faces = face_ptr.size - 1
@@ -978,6 +880,8 @@ def _dependencies_both(
     never = np.zeros((n_sets, n_faces, m), dtype=np.bool_)
     dep_ptr = np.zeros((n_sets, m * slots + 1), dtype=np.int64)
     fill = np.zeros((n_sets, m * slots), dtype=np.int64)
+    # one pass over the pairs: the triples in the order met, each with the slot
+    # across it waits on; then placed by that slot (a counting sort, stable)
     cap = max(1024, pairs.shape[0] // 2)
     got_set = np.empty(cap, dtype=np.int64)
     got_row = np.empty(cap, dtype=np.int64)
@@ -1145,11 +1049,12 @@ class Attachment:
         )
         self._done, self._leaf, self._post = done, leaf, post
         self._slot_done = slot_done[0]
-        #: what each slot waits on (see :func:`_dependencies`)
-        self._waiting: tuple[NDArray[Any], ...] = _dependencies(
-            args[0], args[1], node_row, np.ascontiguousarray(done), self._slot_done,
+        per_face, never, dep_ptr, *triples = _dependencies(
+            args[0], args[1], node_row, np.ascontiguousarray(done)[None], slot_done,
             args[2], args[3],
         )  # fmt: skip
+        #: what each slot waits on (see :func:`_dependencies`)
+        self._waiting: tuple[NDArray[Any], ...] = (per_face[0], never[0], dep_ptr[0], *triples)
 
     @classmethod
     def both(
@@ -1168,7 +1073,7 @@ class Attachment:
         leaf, post, node_row, slot_done, args = _attachment_inputs(
             done, nodes, exists, neighbours, spans
         )
-        per_face, never, dep_ptr, dep_row, dep_slot, dep_face = _dependencies_both(
+        per_face, never, dep_ptr, dep_row, dep_slot, dep_face = _dependencies(
             args[0], args[1], node_row, np.ascontiguousarray(np.stack(done)), slot_done,
             args[2], args[3],
         )  # fmt: skip

@@ -128,93 +128,48 @@ def _certain_edges(
 
 
 @kernel
-def _pieces_meet(
-    lo: NDArray[np.float64],
-    hi: NDArray[np.float64],
-    combo: NDArray[np.int64],
-    i: int,
-    p: int,
-    ci: int,
-    j: int,
-    q: int,
-    cj: int,
-    tol: float,
-) -> bool:  # pragma: no cover - compiled
-    """Whether the pieces of sub-node (i, p, ci) and (j, q, cj) overlap on every leg."""
-    for leg in range(lo.shape[0]):
-        ki, kj = combo[ci, leg], combo[cj, leg]
-        if not (lo[leg, ki, i, p] <= hi[leg, kj, j, q] + tol):
-            return False
-        if not (lo[leg, kj, j, q] <= hi[leg, ki, i, p] + tol):
-            return False
-    return True
-
-
-@kernel
-def _possible_labels(
-    pairs: NDArray[np.int64],
-    alive: NDArray[np.bool_],
-    has: NDArray[np.bool_],
-    lo: NDArray[np.float64],
-    hi: NDArray[np.float64],
-    combo: NDArray[np.int64],
-    pq: NDArray[np.int64],
-    same_leaf: NDArray[np.bool_],
-    taken: NDArray[np.bool_],
-    tol: float,
-) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
-    """Components of the possible graph of one sign, joined on the fly (no edge list).
-
-    Sub-node ``(leaf * P + posture) * slots + slot``. Touching leaves (the rows of
-    ``pairs``) join the same posture's sub-nodes that exist (``has``: (P, slots, n)) and may
-    hold a configuration (``alive``: (n, P)) where their pieces overlap; within a
-    leaf, the postures of each pair ``pq`` join where ``same_leaf`` says they
-    differ only on folding legs. Labels on the ``taken`` sub-nodes, numbered by
-    first sub-node (as :func:`~moveability.hypertree.topology.edge_components`)."""
-    n, n_post = alive.shape
-    slots = has.shape[1]
-    parent = np.arange(n * n_post * slots)
-    for t in range(pairs.shape[0]):
-        i, j = pairs[t, 0], pairs[t, 1]
-        for p in range(n_post):
-            if not (alive[i, p] and alive[j, p]):
-                continue
-            for ci in range(slots):
-                if not has[p, ci, i]:
-                    continue
-                for cj in range(slots):
-                    if has[p, cj, j] and _pieces_meet(lo, hi, combo, i, p, ci, j, p, cj, tol):
-                        union_sets(
-                            parent, (i * n_post + p) * slots + ci, (j * n_post + p) * slots + cj
-                        )
-    for k in range(pq.shape[0]):
-        p, q = pq[k, 0], pq[k, 1]
-        for i in range(n):
-            if not (alive[i, p] and alive[i, q] and same_leaf[k, i]):
-                continue
-            for cp in range(slots):
-                if not has[p, cp, i]:
-                    continue
-                for cq in range(slots):
-                    if has[q, cq, i] and _pieces_meet(lo, hi, combo, i, p, cp, i, q, cq, tol):
-                        union_sets(
-                            parent, (i * n_post + p) * slots + cp, (i * n_post + q) * slots + cq
-                        )
-    return relabel_roots(parent, taken)
-
-
-@kernel
 def _sub_nodes_meet(
     bounds: NDArray[np.float64], i: int, p: int, ci: int, j: int, q: int, cj: int, tol: float
 ) -> bool:  # pragma: no cover - compiled
     """Whether the pieces of sub-node (i, p, ci) and (j, q, cj) overlap on every leg
-    (``bounds``: (n, P, slots, legs, 2), as :func:`_pieces_meet`)."""
+    (``bounds``: (n, P, slots, legs, 2): each leg's piece of the slot)."""
     for leg in range(bounds.shape[3]):
         if not (bounds[i, p, ci, leg, 0] <= bounds[j, q, cj, leg, 1] + tol):
             return False
         if not (bounds[j, q, cj, leg, 0] <= bounds[i, p, ci, leg, 1] + tol):
             return False
     return True
+
+
+@kernel
+def _join_sub_nodes(
+    parent0: NDArray[np.int64],
+    parent1: NDArray[np.int64],
+    join0: bool,
+    join1: bool,
+    has: NDArray[np.bool_],
+    bounds: NDArray[np.float64],
+    i: int,
+    p: int,
+    j: int,
+    q: int,
+    tol: float,
+) -> None:  # pragma: no cover - compiled
+    """Joins the sub-nodes of node (i, p) and node (j, q) that exist (``has``) and
+    whose pieces overlap, in the union-find ``parent0`` if ``join0`` and in
+    ``parent1`` if ``join1`` (for :func:`_possible_labels_both`)."""
+    n_post, slots = has.shape[1], has.shape[2]
+    for ci in range(slots):
+        if not has[i, p, ci]:
+            continue
+        for cj in range(slots):
+            if has[j, q, cj] and _sub_nodes_meet(bounds, i, p, ci, j, q, cj, tol):
+                u = (i * n_post + p) * slots + ci
+                v = (j * n_post + q) * slots + cj
+                if join0:
+                    union_sets(parent0, u, v)
+                if join1:
+                    union_sets(parent1, u, v)
 
 
 @kernel
@@ -228,8 +183,16 @@ def _possible_labels_both(
     taken: NDArray[np.bool_],
     tol: float,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
-    """:func:`_possible_labels` of both signs from one pass over the pairs: ``alive``
-    (2, n, P) and ``taken`` (2, sub-nodes) per sign; the sub-nodes that exist,
+    """Components of the possible graphs of both signs, joined on the fly (no edge
+    list) from one pass over the pairs.
+
+    Sub-node ``(leaf * P + posture) * slots + slot``. Touching leaves (the rows of
+    ``pairs``) join the same posture's sub-nodes that exist and may hold a
+    configuration (``alive``) where their pieces overlap; within a leaf, the
+    postures of each pair ``pq`` join where ``same_leaf`` says they differ only
+    on folding legs. Labels on the ``taken`` sub-nodes, numbered by first
+    sub-node (as :func:`~moveability.hypertree.topology.edge_components`).
+    ``alive`` (2, n, P) and ``taken`` (2, sub-nodes) per sign; the sub-nodes that exist,
     ``has`` (n, P, slots), and their pieces' bounds, ``bounds`` (n, P, slots,
     legs, 2: each leg's piece of the slot), node by node (one or two cache
     lines a node); whether two pieces overlap is found once for both signs.
@@ -246,19 +209,8 @@ def _possible_labels_both(
         for p in range(n_post):
             both0 = alive[0, i, p] and alive[0, j, p]
             both1 = alive[1, i, p] and alive[1, j, p]
-            if not (both0 or both1):
-                continue
-            for ci in range(slots):
-                if not has[i, p, ci]:
-                    continue
-                for cj in range(slots):
-                    if has[j, p, cj] and _sub_nodes_meet(bounds, i, p, ci, j, p, cj, tol):
-                        u = (i * n_post + p) * slots + ci
-                        v = (j * n_post + p) * slots + cj
-                        if both0:
-                            union_sets(parent0, u, v)
-                        if both1:
-                            union_sets(parent1, u, v)
+            if both0 or both1:
+                _join_sub_nodes(parent0, parent1, both0, both1, has, bounds, i, p, j, p, tol)
     for k in range(pq.shape[0]):
         p, q = pq[k, 0], pq[k, 1]
         for i in range(n):
@@ -266,19 +218,8 @@ def _possible_labels_both(
                 continue
             both0 = alive[0, i, p] and alive[0, i, q]
             both1 = alive[1, i, p] and alive[1, i, q]
-            if not (both0 or both1):
-                continue
-            for cp in range(slots):
-                if not has[i, p, cp]:
-                    continue
-                for cq in range(slots):
-                    if has[i, q, cq] and _sub_nodes_meet(bounds, i, p, cp, i, q, cq, tol):
-                        u = (i * n_post + p) * slots + cp
-                        v = (i * n_post + q) * slots + cq
-                        if both0:
-                            union_sets(parent0, u, v)
-                        if both1:
-                            union_sets(parent1, u, v)
+            if both0 or both1:
+                _join_sub_nodes(parent0, parent1, both0, both1, has, bounds, i, p, i, q, tol)
     labels = np.empty((2, parent0.size), dtype=np.int64)
     counts = np.zeros(2, dtype=np.int64)
     labels[0], counts[0] = relabel_roots(parent0, taken[0])

@@ -154,12 +154,6 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
             array(B1), B1, array(I8, 2), array(B1, 2),
         )
     ],
-    "moveability.analysis.regions._possible_labels": [
-        (
-            array(I8, 2), array(B1, 2), array(B1, 3), array(F8, 4), array(F8, 4),
-            array(I8, 2), array(I8, 2), array(B1, 2), array(B1), F8,
-        )
-    ],
     "moveability.analysis.flows._face_sides": [
         (array(I8, 2), array(I8, 2), array(I8, 2), array(I8), array(B1))
     ],
@@ -167,12 +161,6 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         (
             array(B1, 2, out=True), array(U8, 2), array(I8, 3, out=True), array(B1, 2),
             array("uint8", 2), array(I8), array(I8), array(I8), array(I8),
-        )
-    ],
-    "moveability.analysis.flows._dependencies": [
-        (
-            array(I8, 2), array(I8), array(I8, 2), array(B1, 2), array(B1, 2),
-            array(F8, 4), array(B1, 2),
         )
     ],
     "moveability.analysis.result._walk_back": [
@@ -224,7 +212,7 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.hypertree._kernels._remapped_merged": [
         (array(I8, 2), array(I8, 2), array(I8))
     ],
-    "moveability.analysis.flows._dependencies_both": [
+    "moveability.analysis.flows._dependencies": [
         (
             array(I8, 2), array(I8), array(I8, 2), array(B1, 3), array(B1, 3),
             array(F8, 4), array(B1, 2),

@@ -21,7 +21,6 @@ __all__ = [
     "edge_components",
     "label_leaves",
     "mark_sources",
-    "refined_pairs",
     "remap_pairs",
 ]
 
@@ -297,23 +296,37 @@ def adjacent_and_face_pairs(
     layout: KeyLayout,
     periodic: tuple[int, ...],
     directions: NDArray[np.int8],
-    sources: NDArray[np.bool_] | None = None,
-    fresh: NDArray[np.bool_] | None = None,
-    known: tuple[NDArray[np.int64], NDArray[np.int64]] | None = None,
+    refined: tuple[
+        NDArray[np.bool_], tuple[NDArray[np.int64], NDArray[np.int64]], NDArray[np.int64]
+    ]
+    | None = None,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """:func:`adjacent_pairs` with ``directions`` and the pairs of those found by
-    its directions along an axis (face adjacency), from one search. ``known``
-    gives both kinds of pairs between kept leaves, for a refined tree."""
-    args = _layout_arrays(layout, periodic)
+    its directions along an axis (face adjacency), from one search.
+
+    For a refined tree, ``refined`` is ``(fresh, old, new_of_old)``: the new
+    leaves, the coarser tree's pairs of both kinds, and each old leaf's new
+    index (-1 where split). Then the new leaves and the kept ones that touched
+    a split one probe, and the old pairs between kept leaves are merged with
+    those found as they are remapped."""
     n = keys.size
-    every = np.ones(n, dtype=np.bool_)
-    src = every if sources is None else sources
-    new = every if fresh is None else fresh
-    a, b, face = _pairs(keys, levels, chosen, *args, directions, src, new)
-    known_all, known_faces = (None, None) if known is None else known
+    if refined is None:
+        sources = fresh = np.ones(n, dtype=np.bool_)
+    else:
+        fresh, old, new_of_old = refined
+        old_all = np.ascontiguousarray(old[0], dtype=np.int64).reshape(-1, 2)
+        old_faces = np.ascontiguousarray(old[1], dtype=np.int64).reshape(-1, 2)
+        new_of_old = np.ascontiguousarray(new_of_old, dtype=np.int64)
+        sources = fresh.copy()
+        mark_sources(old_all, new_of_old, sources)
+    a, b, face = _pairs(
+        keys, levels, chosen, *_layout_arrays(layout, periodic), directions, sources, fresh
+    )
+    if refined is None:
+        return _sorted_pairs(a, b, n), _sorted_pairs(a[face], b[face], n)
     return (
-        _with_known(a, b, n, known_all),
-        _with_known(a[face], b[face], n, known_faces),
+        _with_remapped(a, b, n, old_all, new_of_old),
+        _with_remapped(a[face], b[face], n, old_faces, new_of_old),
     )
 
 
@@ -495,37 +508,6 @@ def _with_remapped(
         return merged
     known = remap_pairs(old, new_of_old, np.zeros(new_of_old.size, dtype=np.bool_))
     return _with_known(a, b, n, known)
-
-
-def refined_pairs(
-    keys: NDArray[np.uint64],
-    levels: NDArray[np.uint8],
-    chosen: NDArray[np.bool_],
-    layout: KeyLayout,
-    periodic: tuple[int, ...],
-    directions: NDArray[np.int8],
-    fresh: NDArray[np.bool_],
-    old: tuple[NDArray[np.int64], NDArray[np.int64]],
-    new_of_old: NDArray[np.int64],
-) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """:func:`adjacent_and_face_pairs` of a refined tree whose coarser tree's pairs
-    of both kinds ``old`` are known (``new_of_old``: each old leaf's new index,
-    -1 where split; ``fresh``: the new leaves): the new leaves and the kept
-    ones that touched a split one probe, and the old pairs between kept leaves
-    are merged with those found as they are remapped."""
-    old_all = np.ascontiguousarray(old[0], dtype=np.int64).reshape(-1, 2)
-    old_faces = np.ascontiguousarray(old[1], dtype=np.int64).reshape(-1, 2)
-    new_of_old = np.ascontiguousarray(new_of_old, dtype=np.int64)
-    sources = fresh.copy()
-    mark_sources(old_all, new_of_old, sources)
-    n = keys.size
-    a, b, face = _pairs(
-        keys, levels, chosen, *_layout_arrays(layout, periodic), directions, sources, fresh
-    )
-    return (
-        _with_remapped(a, b, n, old_all, new_of_old),
-        _with_remapped(a[face], b[face], n, old_faces, new_of_old),
-    )
 
 
 def _layout_arrays(

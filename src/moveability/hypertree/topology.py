@@ -27,7 +27,6 @@ from ._kernels import (
     adjacent_pairs,
     edge_components,
     label_leaves,
-    refined_pairs,
     remap_pairs,
 )
 from .status import IN, status_mask
@@ -253,16 +252,14 @@ def refined_touching(
         return touching(tree, status=status)
     chosen, kept, new_of_old = refined
     # the kept leaves that touched a split one probe: those by a face among them
-    pairs, faces = refined_pairs(
+    pairs, faces = adjacent_and_face_pairs(
         tree.keys,
         tree.levels,
         chosen,
         tree.layout,
         tree.periodic,
         directions(tree.ndim, tree.ndim),
-        ~kept,
-        (np.asarray(old_pairs), np.asarray(old_face_pairs)),
-        new_of_old,
+        refined=(~kept, (np.asarray(old_pairs), np.asarray(old_face_pairs)), new_of_old),
     )
     return pairs.astype(np.intp, copy=False), faces.astype(np.intp, copy=False)
 
