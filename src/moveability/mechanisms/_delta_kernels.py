@@ -91,23 +91,23 @@ __all__ = [
     N_CONSTANTS,
 ) = range(13)  # fmt: skip
 
-_PI_UP = float(np.nextafter(np.pi, np.inf))
+PI_UP = float(np.nextafter(np.pi, np.inf))
 #: the smallest positive subnormal
 _TINY = 5e-324
 #: ``intervals._rel(4)`` and 4 ulps of ``_TINY``: the library functions' widening
-_LIB_REL = 5 * 2.0**-52
-_LIB_TINY = 4 * _TINY
+LIB_REL = 5 * 2.0**-52
+LIB_TINY = 4 * _TINY
 
 
 # ------------------------------------------------------------------ one element
 @kernel(inline=True)
-def _clip_mid(lo: float, hi: float) -> float:  # pragma: no cover - compiled
+def clip_mid(lo: float, hi: float) -> float:  # pragma: no cover - compiled
     """``Interval.mid``: ``np.clip(0.5 * lo + 0.5 * hi, lo, hi)``."""
     return nan_min(nan_max(0.5 * lo + 0.5 * hi, lo), hi)
 
 
 @kernel(inline=True)
-def _plane(
+def plane(
     x_lo: float, x_hi: float, y_lo: float, y_hi: float, leg: Array
 ) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
     """``DeltaLeg._plane_boxes``: ``s = x u_x + y u_y + (r - R)`` and ``d = y u_x -
@@ -152,7 +152,7 @@ def _g_range(
 
 
 @kernel
-def _g_boxes(
+def g_boxes(
     x_lo: float,
     x_hi: float,
     y_lo: float,
@@ -163,7 +163,7 @@ def _g_boxes(
 ) -> tuple[float, float, float, float, float]:  # pragma: no cover - compiled
     """``DeltaLeg._g_boxes`` of one box: the bounds of ``g`` and the lower bound of
     ``t = sqrt(s^2 + z^2)``, then ``s`` (its bounds)."""
-    s_lo, s_hi, d_lo, d_hi = _plane(x_lo, x_hi, y_lo, y_hi, leg)
+    s_lo, s_hi, d_lo, d_hi = plane(x_lo, x_hi, y_lo, y_hi, leg)
     a_lo, a_hi = interval_square(s_lo, s_hi)
     b_lo, b_hi = interval_square(z_lo, z_hi)
     a_lo, a_hi = interval_add(a_lo, a_hi, b_lo, b_hi)
@@ -291,8 +291,8 @@ def _trig_of(a_lo: Array, a_hi: Array) -> Array:  # pragma: no cover - compiled
     n = a_lo.shape[1]
     out = np.empty((4, 3, n))
     flat_lo, flat_hi = a_lo.copy().reshape(-1), a_hi.copy().reshape(-1)
-    c_lo, c_hi = trig_bounds(flat_lo, flat_hi, False, _LIB_REL, _LIB_TINY)
-    s_lo, s_hi = trig_bounds(flat_lo, flat_hi, True, _LIB_REL, _LIB_TINY)
+    c_lo, c_hi = trig_bounds(flat_lo, flat_hi, False, LIB_REL, LIB_TINY)
+    s_lo, s_hi = trig_bounds(flat_lo, flat_hi, True, LIB_REL, LIB_TINY)
     out[0] = c_lo.reshape(3, n)
     out[1] = c_hi.reshape(3, n)
     out[2] = s_lo.reshape(3, n)
@@ -339,7 +339,7 @@ def regular_boxes(
     for j in range(lo.shape[0]):
         ok = True
         for k in range(3):
-            g_lo, g_hi, t_lo, _, _ = _g_boxes(
+            g_lo, g_hi, t_lo, _, _ = g_boxes(
                 lo[j, 0], hi[j, 0], lo[j, 1], hi[j, 1], lo[j, 2], hi[j, 2], legs[k]
             )
             ok = ok and (t_lo > 0) and (g_lo > -1.0) and (g_hi < 1.0)
@@ -358,12 +358,12 @@ def centre_args(lo: Array, hi: Array, legs: Array, out: Array) -> None:  # pragm
         my = 0.5 * lo[j, 1] + 0.5 * hi[j, 1]
         mz = 0.5 * lo[j, 2] + 0.5 * hi[j, 2]
         for k in range(3):
-            g_lo, g_hi, _, s_lo, s_hi = _g_boxes(mx, mx, my, my, mz, mz, legs[k])
+            g_lo, g_hi, _, s_lo, s_hi = g_boxes(mx, mx, my, my, mz, mz, legs[k])
             # intervals.arccos: np.clip of each bound to [-1, 1]
             out[0, k, j] = nan_min(nan_max(g_hi, -1.0), 1.0)
             out[1, k, j] = nan_min(nan_max(g_lo, -1.0), 1.0)
-            out[2, k, j] = _clip_mid(s_lo, s_hi)
-            out[3, k, j] = _clip_mid(-mz, -mz)
+            out[2, k, j] = clip_mid(s_lo, s_hi)
+            out[3, k, j] = clip_mid(-mz, -mz)
 
 
 @kernel
@@ -379,7 +379,7 @@ def centre_turn(
         my = 0.5 * lo[j, 1] + 0.5 * hi[j, 1]
         mz = 0.5 * lo[j, 2] + 0.5 * hi[j, 2]
         for k in range(3):
-            s_lo, s_hi, _, _ = _plane(mx, mx, my, my, legs[k])
+            s_lo, s_hi, _, _ = plane(mx, mx, my, my, legs[k])
             w_lo, w_hi = -mz, -mz
             c_k, s_k = cs[k, j], sn[k, j]
             p_lo, p_hi = interval_mul(s_lo, s_hi, c_k, c_k)
@@ -404,7 +404,7 @@ def centre_angles(
     for k in range(3):
         for j in range(cs.shape[1]):
             out[2, k, j] = nan_max(lib_below(acos[0, k, j]), 0.0)
-            out[3, k, j] = nan_min(lib_above(acos[1, k, j]), _PI_UP)
+            out[3, k, j] = nan_min(lib_above(acos[1, k, j]), PI_UP)
             c_k, s_k = cs[k, j], sn[k, j]
             r_lo, r_hi = atan_bounds(ref[k, j], ref[k, j], (c_k <= 0) & (s_k <= 0) & (s_k >= 0))
             c0, c1, c2, c3 = corners[0, k, j], corners[1, k, j], corners[2, k, j], corners[3, k, j]

@@ -2,7 +2,7 @@
 poses (``DeltaLeg.reach``), the joints' gradients (``DeltaLeg.joint_gradient``)
 and the flows across their folds (``DeltaLeg.fold_flow``).
 
-As in :mod:`._delta_kernels` (whose one-box helpers ``_plane`` and ``_g_boxes``
+As in :mod:`._delta_kernels` (whose one-box helpers ``plane`` and ``g_boxes``
 these kernels share, with ``intervals.atan_bounds``), each kernel repeats the
 :class:`~moveability.intervals.Interval` operations of the reference kept in
 :class:`~.delta.DeltaLeg` (``_reach_intervals``, ``_joint_gradient_intervals``,
@@ -52,22 +52,22 @@ from ..intervals import (
 )
 from ..types import Array
 from ._delta_kernels import (
-    _LIB_REL,
-    _LIB_TINY,
-    _PI_UP,
     ARM,
     C_HI,
     C_LO,
+    LIB_REL,
+    LIB_TINY,
     OFF_HI,
     OFF_LO,
+    PI_UP,
     TWO_ARM,
     UX_HI,
     UX_LO,
     UY_HI,
     UY_LO,
-    _clip_mid,
-    _g_boxes,
-    _plane,
+    clip_mid,
+    g_boxes,
+    plane,
 )
 
 __all__ = [
@@ -103,7 +103,7 @@ def _reachable(
     x_lo: float, x_hi: float, y_lo: float, y_hi: float, z_lo: float, z_hi: float, leg: Array
 ) -> bool:  # pragma: no cover - compiled
     """Whether the leg is regular over the box (``t > 0`` and ``|g| < 1``)."""
-    g_lo, g_hi, t_lo, _, _ = _g_boxes(x_lo, x_hi, y_lo, y_hi, z_lo, z_hi, leg)
+    g_lo, g_hi, t_lo, _, _ = g_boxes(x_lo, x_hi, y_lo, y_hi, z_lo, z_hi, leg)
     return (t_lo > 0) and (g_lo > -1.0) and (g_hi < 1.0)
 
 
@@ -114,7 +114,7 @@ def _g_gradient(
     """``DeltaLeg._g_gradient`` of one box: the bounds of ``dg/dx``, ``dg/dy``,
     ``dg/dz``. ``scale = (t^2 - d^2 - c) / (t^2 t 2 la)``, ``gs = s scale``, ``gd =
     d / (t la)``: ``(gs u_x - gd u_y, gs u_y + gd u_x, z scale)``."""
-    s_lo, s_hi, d_lo, d_hi = _plane(x_lo, x_hi, y_lo, y_hi, leg)
+    s_lo, s_hi, d_lo, d_hi = plane(x_lo, x_hi, y_lo, y_hi, leg)
     a_lo, a_hi = interval_square(s_lo, s_hi)
     b_lo, b_hi = interval_square(z_lo, z_hi)
     t2_lo, t2_hi = interval_add(a_lo, a_hi, b_lo, b_hi)
@@ -187,7 +187,7 @@ def reach_prepare(
     point = np.empty(3)
     box = np.empty(6)
     for j in range(lo.shape[0]):
-        g_lo, g_hi, t_lo, s_lo, s_hi = _g_boxes(
+        g_lo, g_hi, t_lo, s_lo, s_hi = g_boxes(
             lo[j, 0], hi[j, 0], lo[j, 1], hi[j, 1], lo[j, 2], hi[j, 2], leg
         )
         away = (g_lo > 1.0) or (g_hi < -1.0)
@@ -204,7 +204,7 @@ def reach_prepare(
                         point[axis] = 0.5 * lo[j, axis] + 0.5 * hi[j, axis]
                     else:
                         point[axis] = hi[j, axis] if ((w - 1) >> axis) & 1 else lo[j, axis]
-                p_lo, p_hi, _, _, _ = _g_boxes(
+                p_lo, p_hi, _, _, _ = g_boxes(
                     point[0], point[0], point[1], point[1], point[2], point[2], leg
                 )
                 below_one = below_one or p_hi < 1.0
@@ -234,8 +234,8 @@ def reach_prepare(
         out[P_ACOS_LO, j] = nan_min(nan_max(g_hi, -1.0), 1.0)
         out[P_ACOS_HI, j] = nan_min(nan_max(g_lo, -1.0), 1.0)
         w_lo, w_hi = -hi[j, 2], -lo[j, 2]
-        out[P_S_MID, j] = _clip_mid(s_lo, s_hi)
-        out[P_W_MID, j] = _clip_mid(w_lo, w_hi)
+        out[P_S_MID, j] = clip_mid(s_lo, s_hi)
+        out[P_W_MID, j] = clip_mid(w_lo, w_hi)
         out[P_S_LO, j], out[P_S_HI, j] = s_lo, s_hi
         out[P_W_LO, j], out[P_W_HI, j] = w_lo, w_hi
 
@@ -287,7 +287,7 @@ def reach_finish(
         t_lo, t_hi = atan_bounds(least, most, cut)
         d_lo, d_hi = interval_add(r_lo, r_hi, t_lo, t_hi)
         a_lo = nan_max(lib_below(acos[0, j]), 0.0)
-        a_hi = nan_min(lib_above(acos[1, j]), _PI_UP)
+        a_hi = nan_min(lib_above(acos[1, j]), PI_UP)
         out_lo[0, j], out_hi[0, j] = interval_add(d_lo, d_hi, a_lo, a_hi)
         out_lo[1, j], out_hi[1, j] = interval_sub(d_lo, d_hi, a_lo, a_hi)
         kind = fold[j]
@@ -311,13 +311,13 @@ def joint_gradient_bounds(
     ``[a_lo, a_hi]`` (n,), into ``out`` (3, n): ``-row / (la (s sin + z cos))``,
     the row ``(x + h u_x, y + h u_y, z + la sin)`` with ``h = (r - R) - la
     cos``."""
-    c_lo, c_hi = trig_bounds(a_lo, a_hi, False, _LIB_REL, _LIB_TINY)
-    s_lo, s_hi = trig_bounds(a_lo, a_hi, True, _LIB_REL, _LIB_TINY)
+    c_lo, c_hi = trig_bounds(a_lo, a_hi, False, LIB_REL, LIB_TINY)
+    s_lo, s_hi = trig_bounds(a_lo, a_hi, True, LIB_REL, LIB_TINY)
     la = leg[ARM]
     for j in range(lo.shape[0]):
         x_lo, x_hi, y_lo, y_hi = lo[j, 0], hi[j, 0], lo[j, 1], hi[j, 1]
         z_lo, z_hi = lo[j, 2], hi[j, 2]
-        p_lo, p_hi, _, _ = _plane(x_lo, x_hi, y_lo, y_hi, leg)
+        p_lo, p_hi, _, _ = plane(x_lo, x_hi, y_lo, y_hi, leg)
         e_lo, e_hi = interval_mul(p_lo, p_hi, s_lo[j], s_hi[j])
         f_lo, f_hi = interval_mul(z_lo, z_hi, c_lo[j], c_hi[j])
         e_lo, e_hi = interval_add(e_lo, e_hi, f_lo, f_hi)
@@ -348,13 +348,13 @@ def fold_terms_prepare(
     for j in range(lo.shape[0]):
         x_lo, x_hi, y_lo, y_hi = lo[j, 0], hi[j, 0], lo[j, 1], hi[j, 1]
         z_lo, z_hi = lo[j, 2], hi[j, 2]
-        s_lo, s_hi, _, _ = _plane(x_lo, x_hi, y_lo, y_hi, leg)
+        s_lo, s_hi, _, _ = plane(x_lo, x_hi, y_lo, y_hi, leg)
         a_lo, a_hi = interval_square(s_lo, s_hi)
         b_lo, b_hi = interval_square(z_lo, z_hi)
         terms_lo[T_T2, j], terms_hi[T_T2, j] = interval_add(a_lo, a_hi, b_lo, b_hi)
         terms_lo[T_S, j], terms_hi[T_S, j] = s_lo, s_hi
         terms_lo[T_W, j], terms_hi[T_W, j] = -z_hi, -z_lo
-        g_lo, g_hi, _, _, _ = _g_boxes(x_lo, x_hi, y_lo, y_hi, z_lo, z_hi, leg)
+        g_lo, g_hi, _, _, _ = g_boxes(x_lo, x_hi, y_lo, y_hi, z_lo, z_hi, leg)
         args[0, j] = nan_min(nan_max(g_hi, -1.0), 1.0)
         args[1, j] = nan_min(nan_max(g_lo, -1.0), 1.0)
         grads = _g_gradient(x_lo, x_hi, y_lo, y_hi, z_lo, z_hi, leg)
@@ -371,8 +371,8 @@ def fold_terms_finish(acos: Array, terms_lo: Array, terms_hi: Array) -> None:  #
     a_lo, a_hi = np.empty(n), np.empty(n)
     for j in range(n):
         a_lo[j] = nan_max(lib_below(acos[0, j]), 0.0)
-        a_hi[j] = nan_min(lib_above(acos[1, j]), _PI_UP)
-    sin_max = trig_bounds(a_lo, a_hi, True, _LIB_REL, _LIB_TINY)[1]
+        a_hi[j] = nan_min(lib_above(acos[1, j]), PI_UP)
+    sin_max = trig_bounds(a_lo, a_hi, True, LIB_REL, LIB_TINY)[1]
     for j in range(n):
         low = 0.0
         if sin_max[j] > 0:

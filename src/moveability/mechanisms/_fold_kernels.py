@@ -8,7 +8,7 @@ is reachable and another not, and that the box is fold-connected along an axis
 (:mod:`moveability.mechanisms.tape`) over the pieces, or the constraint in
 floats at the corners, and reduces the values per box. :func:`fold` takes the
 same steps, on the same floats, in one kernel: the interval tapes by the
-compiled operations of :func:`moveability.mechanisms.tape._ops`, the float
+compiled operations of :func:`moveability.mechanisms.tape.run_ops`, the float
 constraint by its *float tape* (the same operations in floats, in the same
 order), every derived input (sines and cosines of the joint and of the pose)
 computed beforehand in Python by the very functions the interpreted steps call.
@@ -27,7 +27,7 @@ from ..intervals import Interval
 from ..types import Array
 from . import expressions as ex
 from . import tape as tp
-from .tape import _BLOCK, _ops
+from .tape import PIECE_BLOCK, run_ops
 
 __all__ = ["float_program", "fold"]
 
@@ -115,7 +115,7 @@ def _contexts(
             c += 1
         if m == 0:
             continue
-        _ops(code, r_lo, r_hi, m)
+        run_ops(code, r_lo, r_hi, m)
         for e in range(m):
             for s in range(needed.size):
                 pv_lo[s, idx[e]] = r_lo[needed[s], e]
@@ -179,7 +179,7 @@ def _pieces(
             c += 1
         t += 1
     if c > 0:
-        _ops(code, r_lo, r_hi, c)
+        run_ops(code, r_lo, r_hi, c)
     return c, t
 
 
@@ -318,7 +318,7 @@ def _fold(
     n_b = lo.shape[0]
     n_p = p_local.size
     n_corners = 1 << k
-    block = _BLOCK
+    block = PIECE_BLOCK
     first_pose = k + 1 + n_q
     first_const = first_pose + pd_lo.shape[0]
     r_lo = np.empty((slots, block))

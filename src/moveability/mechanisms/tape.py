@@ -296,11 +296,11 @@ def _max0(x: float) -> float:  # pragma: no cover - compiled
 
 
 #: elements per block of :func:`_run` (its registers stay in cache)
-_BLOCK = 256
+PIECE_BLOCK = 256
 
 
 @kernel
-def _ops(code: NDArray[np.int64], r_lo: Array, r_hi: Array, n: int) -> None:  # pragma: no cover
+def run_ops(code: NDArray[np.int64], r_lo: Array, r_hi: Array, n: int) -> None:  # pragma: no cover
     """The tape's operations over the first ``n`` columns of the registers."""
     for p in range(code.shape[0]):
         op = code[p, 0]
@@ -353,7 +353,7 @@ def _run(
 ) -> None:  # pragma: no cover - compiled
     """The tape over each element ``i``: pose box ``box[i]`` and joint ``q[i]``;
     a block of elements at a time, one operation over the whole block."""
-    block = _BLOCK
+    block = PIECE_BLOCK
     r_lo = np.empty((slots, block))
     r_hi = np.empty((slots, block))
     n_extra = extra_lo.shape[0]
@@ -376,7 +376,7 @@ def _run(
             for e in range(n):
                 r_lo[k + 1 + x, e] = extra_lo[x, start + e]
                 r_hi[k + 1 + x, e] = extra_hi[x, start + e]
-        _ops(code, r_lo, r_hi, n)
+        run_ops(code, r_lo, r_hi, n)
         for e in range(n):
             out_lo[start + e] = r_lo[out, e]
             out_hi[start + e] = r_hi[out, e]
@@ -623,7 +623,7 @@ def _contract(
     over the runs still active, the tape evaluated at ``[m, m]`` (its sines and
     cosines by ``intervals.point_sin_cos``, its derived inputs of the pose
     ``pose_lo[x, box]``): the same steps on the same floats."""
-    block = _BLOCK
+    block = PIECE_BLOCK
     r_lo = np.empty((slots, block))
     r_hi = np.empty((slots, block))
     n_extra = kinds.size
@@ -695,7 +695,7 @@ def _contract(
                         elif kinds[x] == 1:
                             r_lo[k + 1 + x, e] = c_lo
                             r_hi[k + 1 + x, e] = c_hi
-            _ops(code, r_lo, r_hi, cols)
+            run_ops(code, r_lo, r_hi, cols)
             for t in range(m):
                 i = active[start + t]
                 e1 = col1[t]
@@ -911,11 +911,14 @@ def hoisted(prog: Program) -> Program:
     Examples
     --------
     >>> from moveability.mechanisms import expressions as ex
-    >>> cos = traced(ex.cos, "cos")
-    >>> p = program([trace(lambda x, q: (2.0 * x + 1.0) * (x - 3.0) * cos(q), 1)])
+    >>> cos, sin = traced(ex.cos, "cos"), traced(ex.sin, "sin")
+    >>> f = trace(lambda x, q: (2.0 * x + 1.0) * (x - 3.0) * cos(q), 1)
+    >>> df_dq = trace(lambda x, q: (2.0 * x + 1.0) * (x - 3.0) * -sin(q), 1)
+    >>> df_dx = trace(lambda x, q: (4.0 * x - 5.0) * cos(q), 1)
+    >>> p = program([f, df_dq, df_dx])  # the tapes isolate_level takes
     >>> h = hoisted(p)
-    >>> p.code.shape[0], h.code.shape[0], h.hoist[2].size
-    (5, 1, 1)
+    >>> p.code.shape[0] > h.code.shape[0], h.hoist[2].size
+    (True, 3)
     >>> lo, hi = np.array([[0.0], [1.0]]), np.array([[0.5], [3.0]])
     >>> box = np.array([0, 1])
     >>> q = (np.array([0.1, 0.2]), np.array([0.3, 0.4]))
@@ -996,7 +999,7 @@ def _pose_ops(
     """The operations ``code`` on the pose alone over each box ``[lo[i], hi[i]]``
     (its derived inputs ``d[:, i]``): the values of the slots ``needed``."""
     n = lo.shape[0]
-    block = _BLOCK
+    block = PIECE_BLOCK
     r_lo = np.empty((slots, block))
     r_hi = np.empty((slots, block))
     first_const = first_pose + d_lo.shape[0]
@@ -1016,7 +1019,7 @@ def _pose_ops(
             for e in range(m):
                 r_lo[first_pose + x, e] = d_lo[x, start + e]
                 r_hi[first_pose + x, e] = d_hi[x, start + e]
-        _ops(code, r_lo, r_hi, m)
+        run_ops(code, r_lo, r_hi, m)
         for s in range(needed.size):
             for e in range(m):
                 out_lo[s, start + e] = r_lo[needed[s], e]
@@ -1191,7 +1194,7 @@ def _isolate_level(
     per enclosure ``q`` when the pieces are every box with each ``q``."""
     n_box = lo.shape[0]
     m = n_box * tile if tile > 0 else box.size
-    block = _BLOCK
+    block = PIECE_BLOCK
     r_lo = np.empty((slots, block))
     r_hi = np.empty((slots, block))
     first_pose = k + 1 + extra_lo.shape[0]
@@ -1219,7 +1222,7 @@ def _isolate_level(
             for x in range(extra_lo.shape[0]):
                 base_lo[k + 1 + x, e] = extra_lo[x, e]
                 base_hi[k + 1 + x, e] = extra_hi[x, e]
-        _ops(fixed, base_lo, base_hi, q_lo.size)
+        run_ops(fixed, base_lo, base_hi, q_lo.size)
     f_code = code[ranges[0, 0] : ranges[0, 1]]
     d_code = code[ranges[1, 0] : ranges[1 + k, 1]]  # dF/dq, then dF/dX_j
     out_f = outs[0]
@@ -1269,7 +1272,7 @@ def _isolate_level(
             for e in range(n):
                 r_lo[slot, e] = base_lo[slot, qis[e]]
                 r_hi[slot, e] = base_hi[slot, qis[e]]
-        _ops(f_code, r_lo, r_hi, n)
+        run_ops(f_code, r_lo, r_hi, n)
         c = 0
         for e in range(n):
             a = r_lo[out_f, e]
@@ -1296,7 +1299,7 @@ def _isolate_level(
             for t in range(c):
                 r_lo[slot, t] = base_lo[slot, near_qis[t]]
                 r_hi[slot, t] = base_hi[slot, near_qis[t]]
-        _ops(d_code, r_lo, r_hi, c)
+        run_ops(d_code, r_lo, r_hi, c)
         for t in range(c):
             dq_lo[t] = r_lo[out_d, t]
             dq_hi[t] = r_hi[out_d, t]
@@ -1313,7 +1316,7 @@ def _isolate_level(
             for x in range(n_pose):
                 r_lo[first_pose + x, t] = centre_lo[x, b]
                 r_hi[first_pose + x, t] = centre_hi[x, b]
-        _ops(f_code, r_lo, r_hi, c)
+        run_ops(f_code, r_lo, r_hi, c)
         # the mean-value form, each offset widened by an ulp of its bounds (the
         # pieces side by side: each one's sum over j in order)
         for t in range(c):
