@@ -366,16 +366,17 @@ def test_sub_node_bounds_are_the_joint_pieces():
         JointLimit(lo=-1.0, hi=2.5, periodic=False, prismatic=False),
         JointLimit(lo=12.0, hi=20.0, periodic=False, prismatic=True),
     )
-    bounds, has = _sub_node_bounds(lo, hi, limits)
+    bounds, piece_of, has = _sub_node_bounds(lo, hi, limits)
     split = split_legs(limits)
-    assert split == [2] and bounds.shape == (200, 2, 2, 4, 2)
+    assert split == [2] and bounds.shape == (200, 2, 4, 2, 2)
+    assert piece_of.tolist() == [[0, 0, 0, 0], [0, 0, 1, 0]]
     want_has = np.ones(has.shape, dtype=bool)
     for i, limit in enumerate(limits):
         want_lo, want_hi, want_ok = joint_pieces(lo[:, :, i], hi[:, :, i], limit)
         for c in range(2):
             k = c if i == 2 else 0
-            np.testing.assert_array_equal(bounds[:, :, c, i, 0], want_lo[k])
-            np.testing.assert_array_equal(bounds[:, :, c, i, 1], want_hi[k])
+            np.testing.assert_array_equal(bounds[:, :, i, piece_of[c, i], 0], want_lo[k])
+            np.testing.assert_array_equal(bounds[:, :, i, piece_of[c, i], 1], want_hi[k])
             want_has[:, :, c] &= want_ok[k]
     np.testing.assert_array_equal(has, want_has)
     assert has.any() and not has.all()
@@ -400,15 +401,11 @@ def test_possible_labels_of_both_signs_are_those_found_apart(seed):
     pq = np.array([[0, 1]], dtype=np.int64)
     same_leaf = rng.random((1, n)) < 0.5
     taken = (alive[:, :, :, None] & has.transpose(2, 0, 1)[None]).reshape(2, -1)
-    # node by node: each slot's piece of each leg, (n, P, slots, legs, 2)
-    bounds = np.empty((n, n_post, slots, n_legs, 2))
-    for c in range(slots):
-        for leg in range(n_legs):
-            bounds[:, :, c, leg, 0] = lo[leg, combo[c, leg]]
-            bounds[:, :, c, leg, 1] = hi[leg, combo[c, leg]]
+    # node by node: each leg's two pieces, (n, P, legs, 2, 2), and each slot's piece
+    bounds = np.ascontiguousarray(np.stack([lo, hi], axis=-1).transpose(2, 3, 0, 1, 4))
     labels, counts = _possible_labels_both(
-        pairs, alive, np.ascontiguousarray(has.transpose(2, 0, 1)), bounds, pq, same_leaf,
-        taken, 1e-9,
+        pairs, alive, np.ascontiguousarray(has.transpose(2, 0, 1)), bounds, combo, pq,
+        same_leaf, taken, 1e-9,
     )  # fmt: skip
 
     def sub(i, p, c):

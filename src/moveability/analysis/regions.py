@@ -129,14 +129,24 @@ def _certain_edges(
 
 @kernel
 def _sub_nodes_meet(
-    bounds: NDArray[np.float64], i: int, p: int, ci: int, j: int, q: int, cj: int, tol: float
+    bounds: NDArray[np.float64],
+    piece_of: NDArray[np.int64],
+    i: int,
+    p: int,
+    ci: int,
+    j: int,
+    q: int,
+    cj: int,
+    tol: float,
 ) -> bool:  # pragma: no cover - compiled
     """Whether the pieces of sub-node (i, p, ci) and (j, q, cj) overlap on every leg
-    (``bounds``: (n, P, slots, legs, 2): each leg's piece of the slot)."""
-    for leg in range(bounds.shape[3]):
-        if not (bounds[i, p, ci, leg, 0] <= bounds[j, q, cj, leg, 1] + tol):
+    (``bounds``: (n, P, legs, 2, 2): each leg's two pieces; ``piece_of`` (slots,
+    legs): the piece of each leg in a slot)."""
+    for leg in range(bounds.shape[2]):
+        a, b = piece_of[ci, leg], piece_of[cj, leg]
+        if not (bounds[i, p, leg, a, 0] <= bounds[j, q, leg, b, 1] + tol):
             return False
-        if not (bounds[j, q, cj, leg, 0] <= bounds[i, p, ci, leg, 1] + tol):
+        if not (bounds[j, q, leg, b, 0] <= bounds[i, p, leg, a, 1] + tol):
             return False
     return True
 
@@ -149,6 +159,7 @@ def _join_sub_nodes(
     join1: bool,
     has: NDArray[np.bool_],
     bounds: NDArray[np.float64],
+    piece_of: NDArray[np.int64],
     i: int,
     p: int,
     j: int,
@@ -163,7 +174,7 @@ def _join_sub_nodes(
         if not has[i, p, ci]:
             continue
         for cj in range(slots):
-            if has[j, q, cj] and _sub_nodes_meet(bounds, i, p, ci, j, q, cj, tol):
+            if has[j, q, cj] and _sub_nodes_meet(bounds, piece_of, i, p, ci, j, q, cj, tol):
                 u = (i * n_post + p) * slots + ci
                 v = (j * n_post + q) * slots + cj
                 if join0:
@@ -178,6 +189,7 @@ def _possible_labels_both(
     alive: NDArray[np.bool_],
     has: NDArray[np.bool_],
     bounds: NDArray[np.float64],
+    piece_of: NDArray[np.int64],
     pq: NDArray[np.int64],
     same_leaf: NDArray[np.bool_],
     taken: NDArray[np.bool_],
@@ -193,9 +205,10 @@ def _possible_labels_both(
     on folding legs. Labels on the ``taken`` sub-nodes, numbered by first
     sub-node (as :func:`~moveability.hypertree.topology.edge_components`).
     ``alive`` (2, n, P) and ``taken`` (2, sub-nodes) per sign; the sub-nodes that exist,
-    ``has`` (n, P, slots), and their pieces' bounds, ``bounds`` (n, P, slots,
-    legs, 2: each leg's piece of the slot), node by node (one or two cache
-    lines a node); whether two pieces overlap is found once for both signs.
+    ``has`` (n, P, slots), and their pieces' bounds, ``bounds`` (n, P, legs, 2,
+    2: each leg's two pieces, node by node), with ``piece_of`` (slots, legs) the
+    piece of each leg in a slot; whether two pieces overlap is found once for
+    both signs.
     Returns the labels (2, sub-nodes) and their counts (2,); each sign's
     components are those of its own graph (a union-find's partition does not
     depend on the order of its unions, and the labels are numbered by first
@@ -210,7 +223,9 @@ def _possible_labels_both(
             both0 = alive[0, i, p] and alive[0, j, p]
             both1 = alive[1, i, p] and alive[1, j, p]
             if both0 or both1:
-                _join_sub_nodes(parent0, parent1, both0, both1, has, bounds, i, p, j, p, tol)
+                _join_sub_nodes(
+                    parent0, parent1, both0, both1, has, bounds, piece_of, i, p, j, p, tol
+                )
     for k in range(pq.shape[0]):
         p, q = pq[k, 0], pq[k, 1]
         for i in range(n):
@@ -219,7 +234,9 @@ def _possible_labels_both(
             both0 = alive[0, i, p] and alive[0, i, q]
             both1 = alive[1, i, p] and alive[1, i, q]
             if both0 or both1:
-                _join_sub_nodes(parent0, parent1, both0, both1, has, bounds, i, p, i, q, tol)
+                _join_sub_nodes(
+                    parent0, parent1, both0, both1, has, bounds, piece_of, i, p, i, q, tol
+                )
     labels = np.empty((2, parent0.size), dtype=np.int64)
     counts = np.zeros(2, dtype=np.int64)
     labels[0], counts[0] = relabel_roots(parent0, taken[0])
@@ -285,10 +302,11 @@ def _stroke_bounds(
 ) -> None:  # pragma: no cover - compiled
     """The pieces of the prismatic joints (legs ``strokes``, strokes ``[stop_lo,
     stop_hi]``) of the (n, P, legs) enclosures, as :func:`joint_pieces` gives
-    them (a NaN bound stays NaN, as in ``np.maximum``): piece 0 into every slot
-    of ``bounds`` (n, P, slots, legs, 2; a stroke has one piece), the slots
-    where it is missing cleared in ``has`` (n, P, slots). One pass."""
-    n, n_post, slots, n_legs = bounds.shape[0], bounds.shape[1], bounds.shape[2], bounds.shape[3]
+    them (a NaN bound stays NaN, as in ``np.maximum``): piece 0 into ``bounds``
+    (n, P, legs, 2, 2; a stroke has one piece, the other is never read), the
+    slots where it is missing cleared in ``has`` (n, P, slots). One pass."""
+    n, n_post, n_legs = bounds.shape[0], bounds.shape[1], bounds.shape[2]
+    slots = has.shape[2]
     for i in range(n):
         for p in range(n_post):
             for leg in range(n_legs):
@@ -297,12 +315,12 @@ def _stroke_bounds(
                 a = lo[i, p, leg]
                 b = hi[i, p, leg]
                 ok = a <= stop_hi[leg] + _TOL and b >= stop_lo[leg] - _TOL
-                piece_lo = stop_lo[leg] if a < stop_lo[leg] else a
-                piece_hi = stop_hi[leg] if b > stop_hi[leg] else b
-                for c in range(slots):
-                    bounds[i, p, c, leg, 0] = piece_lo
-                    bounds[i, p, c, leg, 1] = piece_hi
-                    if not ok:
+                bounds[i, p, leg, 0, 0] = stop_lo[leg] if a < stop_lo[leg] else a
+                bounds[i, p, leg, 0, 1] = stop_hi[leg] if b > stop_hi[leg] else b
+                bounds[i, p, leg, 1, 0] = stop_lo[leg]
+                bounds[i, p, leg, 1, 1] = stop_lo[leg]
+                if not ok:
+                    for c in range(slots):
                         has[i, p, c] = False
 
 
@@ -310,16 +328,20 @@ def _sub_node_bounds(
     angles_lo: NDArray[np.float64],
     angles_hi: NDArray[np.float64],
     limits: tuple[JointLimit, ...],
-) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.bool_]]:
     """The pieces of the sub-nodes of the (n, P, legs) enclosures, node by node:
-    ``bounds`` (n, P, slots, legs, 2), each leg's piece (:func:`joint_pieces`)
-    of the slot (see :func:`split_legs`), and ``has`` (n, P, slots), the
-    sub-nodes whose every leg's piece exists. Prismatic joints in one compiled
-    pass, the others from :func:`joint_pieces`."""
+    ``bounds`` (n, P, legs, 2, 2), each leg's two pieces (:func:`joint_pieces`),
+    ``piece_of`` (slots, legs), the piece of each leg in a slot (see
+    :func:`split_legs`), and ``has`` (n, P, slots), the sub-nodes whose every
+    leg's piece exists. Prismatic joints in one compiled pass, the others from
+    :func:`joint_pieces`."""
     n, n_post, n_legs = angles_lo.shape
     split = split_legs(limits)
     slots = 1 << len(split)
-    bounds = np.empty((n, n_post, slots, n_legs, 2))
+    piece_of = np.zeros((slots, n_legs), dtype=np.int64)
+    for i in split:
+        piece_of[:, i] = (np.arange(slots) >> split.index(i)) & 1
+    bounds = np.empty((n, n_post, n_legs, 2, 2))
     has = np.ones((n, n_post, slots), dtype=bool)
     strokes = np.array([lim.prismatic and not lim.periodic for lim in limits], dtype=bool)
     if strokes.any():
@@ -334,12 +356,12 @@ def _sub_node_bounds(
         )
     for i in np.flatnonzero(~strokes).tolist():
         lo, hi, ok = joint_pieces(angles_lo[:, :, i], angles_hi[:, :, i], limits[i])
+        for k in range(2):
+            bounds[:, :, i, k, 0] = lo[k]
+            bounds[:, :, i, k, 1] = hi[k]
         for c in range(slots):
-            k = (c >> split.index(i)) & 1 if i in split else 0
-            bounds[:, :, c, i, 0] = lo[k]
-            bounds[:, :, c, i, 1] = hi[k]
-            has[:, :, c] &= ok[k]
-    return bounds, has
+            has[:, :, c] &= ok[piece_of[c, i]]
+    return bounds, piece_of, has
 
 
 def split_legs(limits: tuple[JointLimit, ...]) -> list[int]:
@@ -409,13 +431,15 @@ def region_graph(
     # and, one turn on, near lo): a path never passes from one to the other. Each
     # node is split by the piece of [lo, hi] each leg's value lies in, and pieces
     # are joined only where they overlap.
-    # per node, each slot's pieces (a cache line or two a node for the pass)
-    bounds, has = _sub_node_bounds(table.angles_lo, table.angles_hi, limits)
+    # per node, each leg's two pieces (once, whatever the slots), and the sub-nodes
+    bounds, piece_of, has = _sub_node_bounds(table.angles_lo, table.angles_hi, limits)
     slots = has.shape[2]
     # both signs from one pass over the pairs
     alive = np.stack([table.may_hold(s) for s in (1, -1)])
     taken = (alive[:, :, :, None] & has[None]).reshape(2, -1)
-    possible, counts = _possible_labels_both(pairs, alive, has, bounds, pq, same_leaf, taken, _TOL)
+    possible, counts = _possible_labels_both(
+        pairs, alive, has, bounds, piece_of, pq, same_leaf, taken, _TOL
+    )
     return RegionGraph(
         certain=certain.reshape(n, n_post),
         possible=possible.reshape(2, n, n_post * slots),

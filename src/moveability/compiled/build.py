@@ -203,7 +203,7 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.analysis.regions._possible_labels_both": [
         (
             array(I8, 2), array(B1, 3), array(B1, 3), array(F8, 5), array(I8, 2),
-            array(B1, 2), array(B1, 2), F8,
+            array(I8, 2), array(B1, 2), array(B1, 2), F8,
         )
     ],
     "moveability.hypertree._kernels.mark_sources": [
