@@ -160,6 +160,30 @@ def test_det_a_bit_for_bit(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", sorted(DESIGNS))
+def test_det_a_postures_bit_for_bit(name: str) -> None:
+    """Every posture at once: each one's bounds as the Interval reference gives them
+    with that posture's enclosures (random ones per leg and branch, of every kind)."""
+    m = DESIGNS[name]
+    lo, hi = _boxes(m, 1501, seed=30 + len(name))
+    rng = np.random.default_rng(31)
+    reaches = [leg._reach_intervals(lo, hi) for leg in m.rr_legs]
+    branch_angles = [[_angles(r, lo.shape[0], rng)[0] for _ in range(2)] for r in reaches]
+    every = m.det_a_postures(lo, hi, branch_angles)
+    assert len(every) == 4
+    for p, branches in enumerate(m.postures):
+        own = [branch_angles[i][int(b)] for i, b in enumerate(branches)]
+        _same(every[p], m._det_a_boxes_intervals(lo, hi, own, p))
+    # the legs' own branches; one box; a leg without one branch's enclosure (the
+    # one-call-per-posture path reports it)
+    own = [list(r.branches) for r in reaches]
+    for p, det in enumerate(m.det_a_postures(lo[:1], hi[:1], [[a[:1] for a in b] for b in own])):
+        first = [own[i][int(b)][:1] for i, b in enumerate(m.postures[p])]
+        _same(det, m._det_a_boxes_intervals(lo[:1], hi[:1], first, p))
+    with pytest.raises(ValueError, match="branch_angles"):
+        m.det_a_postures(lo, hi, [own[0], [own[1][0], None]])
+
+
+@pytest.mark.parametrize("name", sorted(DESIGNS))
 def test_fold_flow_bit_for_bit(name: str) -> None:
     m = DESIGNS[name]
     lo, hi = _boxes(m, 1001, seed=20 + len(name))

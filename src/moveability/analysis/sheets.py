@@ -22,6 +22,7 @@ group is where a region changes posture.
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -204,27 +205,45 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
                     fold_ok |= pair & mechanism.folds_connected((i, j), lo, hi)
     fold_ok &= ~any_out & ~any_unknown
 
+    # each leg's enclosure on each branch a posture takes, and its limit codes:
+    # a branch's own enclosure where the leg is regular, or folds and the leg
+    # encloses each branch there too; else the hull of both
+    branch_angles: list[list[Interval | None]] = []
+    branch_codes: list[list[Any]] = []
+    for i in range(len(legs)):
+        r = reaches[i]
+        used = set(postures[:, i].tolist())
+        leg_angles: list[Interval | None] = [None] * len(r.branches)
+        leg_codes: list[Any] = [None] * len(r.branches)
+        for b in sorted(used):
+            if r.branches[b] is r.hull:
+                # the leg's branch is its hull: the same enclosure and codes everywhere
+                leg_angles[b] = Interval(np.array(r.hull.lo), np.array(r.hull.hi))
+                leg_codes[b] = hull_limits[i]
+                continue
+            regular = leg_status[:, i] == REGULAR
+            if getattr(legs[i], "branches_at_folds", False):
+                regular = regular | (folding[:, i] & (leg_status[:, i] != REACH_UNKNOWN))
+            leg_angles[b] = Interval(
+                np.where(regular, r.branches[b].lo, r.hull.lo),
+                np.where(regular, r.branches[b].hi, r.hull.hi),
+            )
+            leg_codes[b] = np.where(regular, branch_limits[i][b], hull_limits[i])
+        branch_angles.append(leg_angles)
+        branch_codes.append(leg_codes)
+    dets: list[Interval] | None = None
+    if pose_det is None:
+        with np.errstate(invalid="ignore"):
+            dets = mechanism.det_a_postures(lo, hi, branch_angles)
+
     for p in range(n_post):
         angles: list[Interval] = []
         lim_in = np.ones(n, dtype=bool)
         lim_out = np.zeros(n, dtype=bool)
         for i, b in enumerate(postures[p]):
-            r = reaches[i]
-            # a branch's own enclosure where the leg is regular, or folds and the leg
-            # encloses each branch there too; else the hull of both
-            if r.branches[b] is r.hull:
-                # the leg's branch is its hull: the same enclosure and codes everywhere
-                a = Interval(np.array(r.hull.lo), np.array(r.hull.hi))
-                code = hull_limits[i]
-            else:
-                regular = leg_status[:, i] == REGULAR
-                if getattr(legs[i], "branches_at_folds", False):
-                    regular = regular | (folding[:, i] & (leg_status[:, i] != REACH_UNKNOWN))
-                a = Interval(
-                    np.where(regular, r.branches[b].lo, r.hull.lo),
-                    np.where(regular, r.branches[b].hi, r.hull.hi),
-                )
-                code = np.where(regular, branch_limits[i][b], hull_limits[i])
+            a = branch_angles[i][b]
+            assert a is not None
+            code = branch_codes[i][b]
             angles.append(a)
             angles_lo[:, p, i] = a.lo
             angles_hi[:, p, i] = a.hi
@@ -239,11 +258,8 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         if beyond is not None:
             lim_in &= beyond == INSIDE
             lim_out |= beyond == OUTSIDE
-        if pose_det is not None:
-            det = pose_det
-        else:
-            with np.errstate(invalid="ignore"):
-                det = mechanism.det_a_boxes(lo, hi, angles, posture=p)
+        det = dets[p] if dets is not None else pose_det
+        assert det is not None
         if signs is not None:
             no_plus, no_minus = signs
             lim_out |= no_plus & no_minus

@@ -108,6 +108,9 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.mechanisms._rpr_kernels.pose_bounds": [(R2, R2, R2, W2, W2, W1, W1)],
     "moveability.mechanisms._rr_kernels.knee_bounds": [(R1, R1, R1, W2, W2)],
     "moveability.mechanisms._rr_kernels.det_a_bounds": [(R2, R2, R2, R2, R2, array(I8), W1, W1)],
+    "moveability.mechanisms._rr_kernels.det_a_postures": [
+        (R2, R2, array(F8, 3), array(F8, 3), R2, array(I8, 2), W2, W2)
+    ],
     "moveability.mechanisms._rr_kernels.reach_prepare": [
         (R2, R2, R1, R1, R1, array("uint8"), W2, array("uint8", out=True))
     ],

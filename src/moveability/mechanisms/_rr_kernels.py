@@ -68,6 +68,7 @@ from ..types import Array
 
 __all__ = [
     "det_a_bounds",
+    "det_a_postures",
     "fold_rate_bounds",
     "fold_terms_finish",
     "fold_terms_prepare",
@@ -211,11 +212,21 @@ def _branch_form(
     """``five_bar.branch_det`` over the chunk into slot ``o``: the pose in slots
     ``px``, ``px + 1``, the other elbow in ``q``, ``q + 1``, ``side`` +1 on branch
     0 and -1 on branch 1, ``g_top`` the upper bound of ``g(a^2 + b^2)``; slots
-    ``t .. t + 16`` are scratch."""
+    ``t .. t + 16`` are scratch (:func:`_branch_pose`, then :func:`_branch_side`)."""
+    _branch_pose(lo, hi, leg, g_top, px, t, t + 8, w)
+    _branch_side(lo, hi, leg, side, px, q, o, t, t + 8, w)
+
+
+@kernel
+def _branch_pose(
+    lo: Array, hi: Array, leg: Array, g_top: float, px: Slot, t: Slot, s: Slot, w: int
+) -> None:  # pragma: no cover - compiled
+    """The half of :func:`_branch_form` that depends on the pose alone (the same
+    for both branches of the leg and whatever the other elbow): ``x``, ``y`` (the
+    pose less the leg's base), their squares, ``rho``, ``2 rho``, ``1 - c`` and
+    ``k`` into slots ``t .. t + 7``; slots ``s .. s + 8`` are scratch."""
     x, y, sx, sy, rho, r2, omc, k = t, t + 1, t + 2, t + 3, t + 4, t + 5, t + 6, t + 7
-    ox, oy, u, v, cross, wx, wy, dot, shift = (
-        t + 8, t + 9, t + 10, t + 11, t + 12, t + 13, t + 14, t + 15, t + 16,
-    )  # fmt: skip
+    u, v, wx, wy, dot, shift = s + 2, s + 3, s + 5, s + 6, s + 7, s + 8
     slot_sub_c(lo, hi, px, leg[BASE_X], leg[BASE_X], x, w)
     slot_sub_c(lo, hi, px + 1, leg[BASE_Y], leg[BASE_Y], y, w)
     _square_into(lo, hi, x, sx, w)
@@ -245,6 +256,27 @@ def _branch_form(
         inside = (lo[rho, j] <= top) & (hi[rho, j] >= top)
         lo[k, j], hi[k, j] = interval_sqrt(ends_lo, nan_max(ends_hi, g_top) if inside else ends_hi)
     slot_div(lo, hi, k, r2, k, w)
+
+
+@kernel
+def _branch_side(
+    lo: Array,
+    hi: Array,
+    leg: Array,
+    side: float,
+    px: Slot,
+    q: Slot,
+    o: Slot,
+    t: Slot,
+    s: Slot,
+    w: int,
+) -> None:  # pragma: no cover - compiled
+    """The rest of :func:`_branch_form` into slot ``o``, from the pose's half in
+    slots ``t .. t + 7`` (:func:`_branch_pose`), the other elbow in ``q``, ``q +
+    1`` and the branch's ``side``: ``(1 - c) cross + (k dot) side``; slots ``s ..
+    s + 8`` are scratch."""
+    x, y, omc, k = t, t + 1, t + 6, t + 7
+    ox, oy, u, v, cross, wx, wy, dot = s, s + 1, s + 2, s + 3, s + 4, s + 5, s + 6, s + 7
     # (Q - O) x (P - O) and (P - O) . (P - Q)
     slot_sub_c(lo, hi, q, leg[BASE_X], leg[BASE_X], ox, w)
     slot_sub_c(lo, hi, q + 1, leg[BASE_Y], leg[BASE_Y], oy, w)
@@ -267,6 +299,79 @@ def _branch_form(
 # elbow at _TRIG + 4 k + 2); the rows and their products; det A; a branch form
 _P, _TRIG, _ROWS, _NAT, _FORM, _TEMP = 0, 2, 10, 16, 17, 18
 _SLOTS = _TEMP + 17
+
+
+@kernel
+def _load_boxes(
+    lo: Array, hi: Array, s_lo: Array, s_hi: Array, p: Slot, start: int, size: int
+) -> None:  # pragma: no cover - compiled
+    """The boxes ``start .. start + size`` of the (n, 2) ``[lo, hi]`` into slots
+    ``p``, ``p + 1``."""
+    for j in range(size):
+        s_lo[p, j], s_hi[p, j] = lo[start + j, 0], hi[start + j, 0]
+        s_lo[p + 1, j], s_hi[p + 1, j] = lo[start + j, 1], hi[start + j, 1]
+
+
+@kernel
+def _elbow(
+    s_lo: Array,
+    s_hi: Array,
+    a_lo: Array,
+    a_hi: Array,
+    leg: Array,
+    at: Slot,
+    start: int,
+    size: int,
+) -> None:  # pragma: no cover - compiled
+    """A leg's cosine and sine of the angles ``[a_lo, a_hi]`` (from ``start``, box
+    by box) into slots ``at``, ``at + 1``, then its elbow into ``at + 2``, ``at +
+    3`` (vectorised passes)."""
+    for j in range(size):
+        c_lo, c_hi, n_lo, n_hi = _cos_sin(a_lo[start + j], a_hi[start + j])
+        s_lo[at, j], s_hi[at, j] = c_lo, c_hi
+        s_lo[at + 1, j], s_hi[at + 1, j] = n_lo, n_hi
+    _knee_passes(s_lo, s_hi, at, leg[A], leg[BASE_X], leg[BASE_Y], size)
+
+
+@kernel
+def _rows_det(
+    s_lo: Array, s_hi: Array, p: Slot, e0: Slot, e1: Slot, rows: Slot, nat: Slot, size: int
+) -> None:  # pragma: no cover - compiled
+    """The rows ``P - C``, ``P - D`` (the pose in ``p``, the elbows in ``e0``,
+    ``e1``) into slots ``rows .. rows + 3``, their products into ``rows + 4``,
+    ``rows + 5`` and their determinant into ``nat``."""
+    slot_sub(s_lo, s_hi, p, e0, rows, size)
+    slot_sub(s_lo, s_hi, p + 1, e0 + 1, rows + 1, size)
+    slot_sub(s_lo, s_hi, p, e1, rows + 2, size)
+    slot_sub(s_lo, s_hi, p + 1, e1 + 1, rows + 3, size)
+    slot_mul(s_lo, s_hi, rows, rows + 3, rows + 4, size)
+    slot_mul(s_lo, s_hi, rows + 1, rows + 2, rows + 5, size)
+    slot_sub(s_lo, s_hi, rows + 4, rows + 5, nat, size)
+
+
+@kernel
+def _meet_form(
+    s_lo: Array, s_hi: Array, sign: float, form: Slot, nat: Slot, size: int
+) -> None:  # pragma: no cover - compiled
+    """Slot ``nat`` intersected with ``sign`` times slot ``form`` (scaled in
+    place), a NaN bound or an empty meet leaving ``nat`` as it was."""
+    slot_mul_c(s_lo, s_hi, form, sign, sign, form, size)
+    for j in range(size):
+        m_lo = nan_max(s_lo[nat, j], s_lo[form, j])
+        m_hi = nan_min(s_hi[nat, j], s_hi[form, j])
+        # a NaN bound leaves the other enclosure, and so does an empty meet
+        if not (m_lo != m_lo or m_hi != m_hi or m_lo > m_hi):
+            s_lo[nat, j], s_hi[nat, j] = m_lo, m_hi
+
+
+@kernel
+def _g_tops(legs: Array) -> Array:  # pragma: no cover - compiled
+    """Each leg's upper bound of ``g(a^2 + b^2)`` (the top of :func:`_g`)."""
+    g_top = np.empty(2)
+    for leg in range(2):
+        top = legs[leg, TOP]
+        g_top[leg] = _g(top, top, legs[leg, FOUR_A2], legs[leg, SHIFT_LO], legs[leg, SHIFT_HI])[1]
+    return g_top
 
 
 @kernel
@@ -293,55 +398,76 @@ def det_a_bounds(
     p, trig, rows = np.int64(_P), np.int64(_TRIG), np.int64(_ROWS)
     elbows = (trig + 2, trig + 6)
     nat, form, temp = np.int64(_NAT), np.int64(_FORM), np.int64(_TEMP)
-    g_top = np.empty(2)
-    for leg in range(2):
-        top = legs[leg, TOP]
-        g_top[leg] = _g(top, top, legs[leg, FOUR_A2], legs[leg, SHIFT_LO], legs[leg, SHIFT_HI])[1]
-    a0, bx0, by0 = legs[0, A], legs[0, BASE_X], legs[0, BASE_Y]
-    a1, bx1, by1 = legs[1, A], legs[1, BASE_X], legs[1, BASE_Y]
-    leg0, leg1 = legs[0], legs[1]
+    g_top = _g_tops(legs)
     n = lo.shape[0]
     for s in range(0, n, w):
         size = min(w, n - s)
-        for j in range(size):
-            s_lo[p, j], s_hi[p, j] = lo[s + j, 0], hi[s + j, 0]
-            s_lo[p + 1, j], s_hi[p + 1, j] = lo[s + j, 1], hi[s + j, 1]
-        # the elbows: cosine and sine box by box, then vectorised passes; leg
-        # k's cos, sin in slots trig + 4 k, + 1, its elbow x, y in + 2, + 3
+        _load_boxes(lo, hi, s_lo, s_hi, p, s, size)
+        # the elbows: leg k's cos, sin in slots trig + 4 k, + 1, its elbow x, y in + 2, + 3
         for leg in range(2):
-            at = trig + 4 * leg
-            for j in range(size):
-                c_lo, c_hi, n_lo, n_hi = _cos_sin(angles_lo[leg, s + j], angles_hi[leg, s + j])
-                s_lo[at, j], s_hi[at, j] = c_lo, c_hi
-                s_lo[at + 1, j], s_hi[at + 1, j] = n_lo, n_hi
-        _knee_passes(s_lo, s_hi, trig, a0, bx0, by0, size)
-        _knee_passes(s_lo, s_hi, trig + 4, a1, bx1, by1, size)
-        # the rows P - C, P - D and their determinant
-        slot_sub(s_lo, s_hi, p, elbows[0], rows, size)
-        slot_sub(s_lo, s_hi, p + 1, elbows[0] + 1, rows + 1, size)
-        slot_sub(s_lo, s_hi, p, elbows[1], rows + 2, size)
-        slot_sub(s_lo, s_hi, p + 1, elbows[1] + 1, rows + 3, size)
-        slot_mul(s_lo, s_hi, rows, rows + 3, rows + 4, size)
-        slot_mul(s_lo, s_hi, rows + 1, rows + 2, rows + 5, size)
-        slot_sub(s_lo, s_hi, rows + 4, rows + 5, nat, size)
+            _elbow(s_lo, s_hi, angles_lo[leg], angles_hi[leg], legs[leg], trig + 4 * leg, s, size)
+        _rows_det(s_lo, s_hi, p, elbows[0], elbows[1], rows, nat, size)
         if branches[0] >= 0:
             for leg in range(2):
                 side = 1.0 if branches[leg] == 0 else -1.0
-                sign = 1.0 if leg == 0 else -1.0
-                other = elbows[1 - leg]
                 _branch_form(
-                    s_lo, s_hi, leg0 if leg == 0 else leg1, side, g_top[leg], p, other, form,
-                    temp, size,
-                )  # fmt: skip
-                slot_mul_c(s_lo, s_hi, form, sign, sign, form, size)
-                for j in range(size):
-                    m_lo = nan_max(s_lo[nat, j], s_lo[form, j])
-                    m_hi = nan_min(s_hi[nat, j], s_hi[form, j])
-                    # a NaN bound leaves the other enclosure, and so does an empty meet
-                    if not (m_lo != m_lo or m_hi != m_hi or m_lo > m_hi):
-                        s_lo[nat, j], s_hi[nat, j] = m_lo, m_hi
+                    s_lo, s_hi, legs[leg], side, g_top[leg], p, elbows[1 - leg], form, temp, size
+                )
+                _meet_form(s_lo, s_hi, 1.0 if leg == 0 else -1.0, form, nat, size)
         out_lo[s : s + size] = s_lo[nat, :size]
         out_hi[s : s + size] = s_hi[nat, :size]
+
+
+# the slots of det_a_postures: the box; leg k's cos, sin and elbow on branch b
+# from _PTRIG + 8 k + 4 b; the rows and their products; det A; a branch form;
+# leg k's half of its forms that depends on the pose alone from _PPOSE + 8 k
+_PP, _PTRIG, _PROWS, _PNAT, _PFORM, _PPOSE, _PTEMP = 0, 2, 18, 24, 25, 26, 42
+_P_SLOTS = _PTEMP + 9
+
+
+@kernel
+def det_a_postures(
+    lo: Array,
+    hi: Array,
+    angles_lo: Array,
+    angles_hi: Array,
+    legs: Array,
+    postures: NDArray[np.int64],
+    out_lo: Array,
+    out_hi: Array,
+) -> None:  # pragma: no cover - compiled
+    """:func:`det_a_bounds` of every posture at once: ``angles`` (2, 2, n) each
+    leg's enclosure on each branch, ``postures`` (P, 2) each posture's branches,
+    ``out`` (P, n). What one leg's branch or the pose alone determines (the
+    elbows, the pose's half of the branch forms) is computed once for the
+    postures, not once for each: the same operations on the same operands, so
+    the bounds of :func:`det_a_bounds` of each posture, bit for bit."""
+    w = _CHUNK
+    s_lo, s_hi = np.empty((_P_SLOTS, w)), np.empty((_P_SLOTS, w))
+    p, trig, rows = np.int64(_PP), np.int64(_PTRIG), np.int64(_PROWS)
+    nat, form, pose, temp = np.int64(_PNAT), np.int64(_PFORM), np.int64(_PPOSE), np.int64(_PTEMP)
+    g_top = _g_tops(legs)
+    n = lo.shape[0]
+    for s in range(0, n, w):
+        size = min(w, n - s)
+        _load_boxes(lo, hi, s_lo, s_hi, p, s, size)
+        for leg in range(2):
+            for b in range(2):
+                at = trig + 8 * leg + 4 * b
+                _elbow(s_lo, s_hi, angles_lo[leg, b], angles_hi[leg, b], legs[leg], at, s, size)
+            _branch_pose(s_lo, s_hi, legs[leg], g_top[leg], p, pose + 8 * leg, temp, size)
+        for q in range(postures.shape[0]):
+            elbows = (trig + 4 * postures[q, 0] + 2, trig + 8 + 4 * postures[q, 1] + 2)
+            _rows_det(s_lo, s_hi, p, elbows[0], elbows[1], rows, nat, size)
+            for leg in range(2):
+                side = 1.0 if postures[q, leg] == 0 else -1.0
+                _branch_side(
+                    s_lo, s_hi, legs[leg], side, p, elbows[1 - leg], form, pose + 8 * leg, temp,
+                    size,
+                )  # fmt: skip
+                _meet_form(s_lo, s_hi, 1.0 if leg == 0 else -1.0, form, nat, size)
+            out_lo[q, s : s + size] = s_lo[nat, :size]
+            out_hi[q, s : s + size] = s_hi[nat, :size]
 
 
 # ------------------------------------------------------------------ reach

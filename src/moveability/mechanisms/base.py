@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import copy
 import itertools
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -608,6 +609,38 @@ class Mechanism:
         (``posture``, when given, is the posture whose configurations they hold)."""
         rows = [leg.a_row_boxes(lo, hi, angles[i]) for i, leg in enumerate(self.legs)]
         return interval_det(rows)
+
+    def det_a_postures(
+        self, lo: Array, hi: Array, branch_angles: Sequence[Sequence[Interval | None]]
+    ) -> list[Interval]:
+        """:meth:`det_a_boxes` of every posture over the same boxes, from each leg's
+        joint-angle enclosure on each branch (``branch_angles[i][b]``, leg ``i`` on
+        branch ``b``; None for a branch no posture takes): posture ``p`` has leg
+        ``i``'s enclosure on its branch ``postures[p][i]``. Here one call per
+        posture; a mechanism may compute what several postures share once.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from moveability.mechanisms import FiveBar
+        >>> m = FiveBar()
+        >>> lo, hi = np.array([[3.0, 8.5]]), np.array([[3.5, 9.0]])
+        >>> reach = [leg.reach(lo, hi) for leg in m.legs]
+        >>> angles = [list(r.branches) for r in reach]
+        >>> every = m.det_a_postures(lo, hi, angles)
+        >>> one = m.det_a_boxes(lo, hi, [angles[0][1], angles[1][0]], posture=2)
+        >>> m.postures[2].tolist()
+        [1, 0]
+        >>> bool(every[2].lo[0] == one.lo[0] and every[2].hi[0] == one.hi[0])
+        True
+        """
+        out = []
+        for p, branches in enumerate(self.postures):
+            angles = [branch_angles[i][int(b)] for i, b in enumerate(branches)]
+            if any(a is None for a in angles):
+                raise ValueError(f"branch_angles: no enclosure for a branch of posture {p}")
+            out.append(self.det_a_boxes(lo, hi, angles, posture=p))  # type: ignore[arg-type]
+        return out
 
     def reaches_and_det(self, lo: Array, hi: Array) -> tuple[list[LegReach], Interval | None]:
         """Each leg's reach over boxes of poses and, for a mechanism whose det A

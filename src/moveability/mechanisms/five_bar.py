@@ -7,6 +7,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -164,6 +166,40 @@ class FiveBar(Mechanism):
             *boxes, angles_lo, angles_hi, self._leg_constants, branches, out_lo, out_hi
         )
         return Interval(out_lo, out_hi)
+
+    def det_a_postures(
+        self, lo: Array, hi: Array, branch_angles: Sequence[Sequence[Interval | None]]
+    ) -> list[Interval]:
+        """:meth:`det_a_boxes` of the four postures in one compiled pass
+        (:func:`._rr_kernels.det_a_postures`): each elbow once per branch and the
+        pose's half of each leg's branch form once, not once per posture; the
+        same bounds as :meth:`det_a_boxes` of each posture, bit for bit.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> m = FiveBar()
+        >>> lo, hi = np.array([[3.0, 8.5]]), np.array([[3.5, 9.0]])
+        >>> angles = [list(leg.reach(lo, hi).branches) for leg in m.legs]
+        >>> [bool(d.lo[0] < 0 < d.hi[0]) for d in m.det_a_postures(lo, hi, angles)]
+        [False, False, False, False]
+        """
+        boxes = pose_boxes(lo, hi)
+        n_boxes = np.shape(lo)[0]
+        flat = [
+            [None if a is None else flat_bounds(a, n_boxes) for a in leg] for leg in branch_angles
+        ]
+        if boxes is None or len(flat) != 2 or any(len(f) != 2 or None in f for f in flat):
+            return super().det_a_postures(lo, hi, branch_angles)
+        n = boxes[0].shape[0]
+        angles_lo = np.array([[f[0] for f in leg] for leg in flat])  # type: ignore[index]
+        angles_hi = np.array([[f[1] for f in leg] for leg in flat])  # type: ignore[index]
+        postures = np.ascontiguousarray(self.postures, dtype=np.int64)
+        out_lo, out_hi = np.empty((postures.shape[0], n)), np.empty((postures.shape[0], n))
+        kernels.det_a_postures(
+            *boxes, angles_lo, angles_hi, self._leg_constants, postures, out_lo, out_hi
+        )
+        return [Interval(out_lo[p], out_hi[p]) for p in range(postures.shape[0])]
 
     def _det_a_boxes_intervals(
         self, lo: Array, hi: Array, angles: list[Interval], posture: int | None = None
