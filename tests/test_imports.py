@@ -4,6 +4,7 @@ scipy, sympy and matplotlib stay unimported where they are not used."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -68,3 +69,21 @@ def test_every_exported_mechanism_class_resolves():
         assert name in dir(mechanisms)
     with pytest.raises(AttributeError, match="NoSuchRobot"):
         mechanisms.NoSuchRobot  # type: ignore[attr-defined]  # noqa: B018
+
+
+@pytest.mark.parametrize(("given", "expected"), [(None, "1"), ("3", "3")])
+def test_a_command_runs_blas_on_one_thread_unless_the_user_says(given, expected):
+    """The command line sets OpenBLAS to one thread before numpy's first import (a
+    user's own value is kept): what numpy's configuration then reads."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if given is not None:
+        env["OPENBLAS_NUM_THREADS"] = given
+    probe = (
+        "import moveability.cli, os, sys\n"
+        "assert 'numpy' in sys.modules\n"
+        "print(os.environ['OPENBLAS_NUM_THREADS'])"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True, env=env
+    ).stdout
+    assert out.split() == [expected]

@@ -20,6 +20,14 @@ Error: invalid spec: expected an existing TOML file, got 'missing.toml'
 
 from __future__ import annotations
 
+import os
+
+# The package calls BLAS on small matrices only (a few rows): a command runs it on
+# one thread and does not start OpenBLAS's pool of threads when numpy is first
+# imported (below), which costs a short command most of its start on a busy
+# machine. A value the user set is kept.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import click
 
 from .. import __version__
