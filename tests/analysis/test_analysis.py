@@ -405,7 +405,7 @@ def test_possible_labels_of_both_signs_are_those_found_apart(seed):
     bounds = np.ascontiguousarray(np.stack([lo, hi], axis=-1).transpose(2, 3, 0, 1, 4))
     labels, counts = _possible_labels_both(
         pairs, alive, np.ascontiguousarray(has.transpose(2, 0, 1)), bounds, combo, pq,
-        same_leaf, taken, 1e-9,
+        same_leaf, taken, 1e-9, np.full((n, n_post), -1), np.zeros((n, n_post), np.int8),
     )  # fmt: skip
 
     def sub(i, p, c):
@@ -446,3 +446,41 @@ def test_possible_labels_of_both_signs_are_those_found_apart(seed):
         assert counts[s] == count
         # neither everything nor nothing joined
         assert 1 < count < int(taken[s].sum())
+
+
+@pytest.mark.parametrize(
+    ("spec", "precision", "generalized"),
+    [
+        ("five-bar-paper.toml", 0.1, False),
+        ("five-bar-paper.toml", 0.1, True),
+        ("five-bar-full-turn.toml", 0.15, False),
+        ("five-bar-unlimited.toml", 0.15, False),
+        ("five-bar-custom-passive.toml", 0.15, False),
+        ("biglide.toml", 0.1, False),
+        ("three-rpr.toml", 0.6, False),
+        ("delta.toml", 0.3, False),
+    ],
+)
+def test_possible_graph_seeded_with_the_certain_one_is_the_same(spec, precision, generalized):
+    """The possible graphs joined from the certain graph's components first (and
+    the pairs inside one component skipped) have the components of the graphs
+    joined pair by pair: every certain edge's pieces overlap."""
+    from pathlib import Path
+
+    from moveability.analysis.regions import region_graph
+
+    path = Path(__file__).resolve().parents[2] / "examples" / spec
+    r = analyze(str(path), precision=precision, generalized_aspects=generalized)
+    args = (r.table, r._pairs, r.mechanism.postures)
+    kwargs = {
+        "cross_serial": not generalized,
+        "limits": r.mechanism.limits,
+        "reachable_contact": r._contact,
+    }
+    seeded = region_graph(*args, **kwargs)
+    plain = region_graph(*args, **kwargs, seed_certain=False)
+    np.testing.assert_array_equal(seeded.possible, plain.possible)
+    assert seeded.n_possible == plain.n_possible
+    np.testing.assert_array_equal(seeded.certain, plain.certain)
+    # the seeds were used: some certain component holds more than one node
+    assert (np.bincount(seeded.certain[seeded.certain >= 0]) > 1).any()

@@ -184,6 +184,44 @@ def _join_sub_nodes(
 
 
 @kernel
+def _seed_certain(
+    parent0: NDArray[np.int64],
+    parent1: NDArray[np.int64],
+    alive: NDArray[np.bool_],
+    has: NDArray[np.bool_],
+    certain: NDArray[np.int64],
+    sign: NDArray[np.int8],
+) -> NDArray[np.bool_]:  # pragma: no cover - compiled
+    """For :func:`_possible_labels_both`: the first sub-node of each node of a
+    certain component joined, in the union-find of its sign, with the first
+    seeded sub-node of that component; returns the seeded nodes (n, P)."""
+    n, n_post, slots = has.shape
+    seeded = np.zeros((n, n_post), dtype=np.bool_)
+    first = np.full(certain.max() + 1 if certain.size else 0, -1, dtype=np.int64)
+    for i in range(n):
+        for p in range(n_post):
+            c = certain[i, p]
+            if c < 0 or not has[i, p, 0]:
+                continue
+            one_slot = True
+            for ci in range(1, slots):
+                if has[i, p, ci]:
+                    one_slot = False
+            row = 0 if sign[i, p] > 0 else 1
+            if not one_slot or sign[i, p] == 0 or not alive[row, i, p] or alive[1 - row, i, p]:
+                continue
+            seeded[i, p] = True
+            u = (i * n_post + p) * slots
+            if first[c] < 0:
+                first[c] = u
+            elif row == 0:
+                union_sets(parent0, first[c], u)
+            else:
+                union_sets(parent1, first[c], u)
+    return seeded
+
+
+@kernel
 def _possible_labels_both(
     pairs: NDArray[np.int64],
     alive: NDArray[np.bool_],
@@ -194,6 +232,8 @@ def _possible_labels_both(
     same_leaf: NDArray[np.bool_],
     taken: NDArray[np.bool_],
     tol: float,
+    certain: NDArray[np.int64],
+    sign: NDArray[np.int8],
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:  # pragma: no cover - compiled
     """Components of the possible graphs of both signs, joined on the fly (no edge
     list) from one pass over the pairs.
@@ -209,6 +249,16 @@ def _possible_labels_both(
     2: each leg's two pieces, node by node), with ``piece_of`` (slots, legs) the
     piece of each leg in a slot; whether two pieces overlap is found once for
     both signs.
+
+    The certain graph's components (``certain`` (n, P), -1 off it; ``sign`` (n,
+    P) of det A) are joined first: each holds configurations that are connected,
+    so the possible graph of their sign joins them too. A node of one (one
+    sub-node, the first, that exists, alive for its sign alone) is *seeded*,
+    and a pair of seeded nodes of one certain component is not looked at again.
+    This changes no component where the pieces of a certain edge overlap, as
+    they do (an edge of the certain graph joins configurations); it spares the
+    pairs inside the certified parts of the regions. ``certain`` all -1 seeds
+    nothing.
     Returns the labels (2, sub-nodes) and their counts (2,); each sign's
     components are those of its own graph (a union-find's partition does not
     depend on the order of its unions, and the labels are numbered by first
@@ -217,9 +267,12 @@ def _possible_labels_both(
     slots = has.shape[2]
     parent0 = np.arange(n * n_post * slots)
     parent1 = np.arange(n * n_post * slots)
+    seeded = _seed_certain(parent0, parent1, alive, has, certain, sign)
     for t in range(pairs.shape[0]):
         i, j = pairs[t, 0], pairs[t, 1]
         for p in range(n_post):
+            if seeded[i, p] and seeded[j, p] and certain[i, p] == certain[j, p]:
+                continue
             both0 = alive[0, i, p] and alive[0, j, p]
             both1 = alive[1, i, p] and alive[1, j, p]
             if both0 or both1:
@@ -230,6 +283,8 @@ def _possible_labels_both(
         p, q = pq[k, 0], pq[k, 1]
         for i in range(n):
             if not same_leaf[k, i]:
+                continue
+            if seeded[i, p] and seeded[i, q] and certain[i, p] == certain[i, q]:
                 continue
             both0 = alive[0, i, p] and alive[0, i, q]
             both1 = alive[1, i, p] and alive[1, i, q]
@@ -290,37 +345,72 @@ def joint_pieces(
     return np.stack([lo0, lo1]), np.stack([hi0, hi1]), np.stack([ok0, ok1])
 
 
+#: the kinds of joint of :func:`_piece_bounds`
+_FREE, _STROKE, _REVOLUTE = 0, 1, 2
+
+
 @kernel
-def _stroke_bounds(
+def _piece_bounds(
     lo: NDArray[np.float64],
     hi: NDArray[np.float64],
-    strokes: NDArray[np.bool_],
+    kinds: NDArray[np.int64],
     stop_lo: NDArray[np.float64],
     stop_hi: NDArray[np.float64],
+    piece_of: NDArray[np.int64],
     bounds: NDArray[np.float64],
     has: NDArray[np.bool_],
 ) -> None:  # pragma: no cover - compiled
-    """The pieces of the prismatic joints (legs ``strokes``, strokes ``[stop_lo,
-    stop_hi]``) of the (n, P, legs) enclosures, as :func:`joint_pieces` gives
-    them (a NaN bound stays NaN, as in ``np.maximum``): piece 0 into ``bounds``
-    (n, P, legs, 2, 2; a stroke has one piece, the other is never read), the
-    slots where it is missing cleared in ``has`` (n, P, slots). One pass."""
+    """Each leg's two pieces of the (n, P, legs) enclosures, as :func:`joint_pieces`
+    gives them for a free joint, a stroke or a limited revolute joint (``kinds``:
+    ``_FREE``, ``_STROKE``, ``_REVOLUTE``; stops ``[stop_lo, stop_hi]``), into
+    ``bounds`` (n, P, legs, 2, 2; a stroke's second piece is never read); the
+    sub-nodes whose piece of some leg is missing (``piece_of`` (slots, legs): the
+    piece of each leg in a slot) cleared in ``has`` (n, P, slots). One pass, the
+    same floats as joint_pieces' numpy operations (a NaN bound stays NaN, as in
+    ``np.maximum``, and fails every comparison)."""
     n, n_post, n_legs = bounds.shape[0], bounds.shape[1], bounds.shape[2]
     slots = has.shape[2]
+    two_pi = 2 * np.pi
     for i in range(n):
         for p in range(n_post):
             for leg in range(n_legs):
-                if not strokes[leg]:
-                    continue
                 a = lo[i, p, leg]
                 b = hi[i, p, leg]
-                ok = a <= stop_hi[leg] + _TOL and b >= stop_lo[leg] - _TOL
-                bounds[i, p, leg, 0, 0] = stop_lo[leg] if a < stop_lo[leg] else a
-                bounds[i, p, leg, 0, 1] = stop_hi[leg] if b > stop_hi[leg] else b
-                bounds[i, p, leg, 1, 0] = stop_lo[leg]
-                bounds[i, p, leg, 1, 1] = stop_lo[leg]
-                if not ok:
-                    for c in range(slots):
+                s_lo, s_hi = stop_lo[leg], stop_hi[leg]
+                if kinds[leg] == _FREE:
+                    for k in range(2):
+                        bounds[i, p, leg, k, 0] = -np.inf
+                        bounds[i, p, leg, k, 1] = np.inf
+                    continue
+                if kinds[leg] == _STROKE:
+                    ok = a <= s_hi + _TOL and b >= s_lo - _TOL
+                    bounds[i, p, leg, 0, 0] = s_lo if a < s_lo else a
+                    bounds[i, p, leg, 0, 1] = s_hi if b > s_hi else b
+                    bounds[i, p, leg, 1, 0] = s_lo
+                    bounds[i, p, leg, 1, 1] = s_lo
+                    if not ok:
+                        for c in range(slots):
+                            has[i, p, c] = False
+                    continue
+                # a limited revolute joint: the turn where the enclosure enters
+                # [s_lo, s_hi], and its next turn from s_lo
+                k_turn = np.floor((a - s_lo) / two_pi)
+                if not np.isfinite(k_turn):
+                    k_turn = 0.0
+                a_lo = a - two_pi * k_turn
+                a_hi = b - two_pi * k_turn
+                wide = not np.isfinite(a) or not np.isfinite(b) or b - a >= two_pi - _TOL
+                ok0 = wide or a_lo <= s_hi + _TOL
+                ok1 = not wide and a_hi - two_pi >= s_lo - _TOL
+                if wide:
+                    bounds[i, p, leg, 0, 0], bounds[i, p, leg, 0, 1] = s_lo, s_hi
+                else:
+                    bounds[i, p, leg, 0, 0] = s_lo if a_lo < s_lo else a_lo
+                    bounds[i, p, leg, 0, 1] = s_hi if a_hi > s_hi else a_hi
+                bounds[i, p, leg, 1, 0] = s_lo
+                bounds[i, p, leg, 1, 1] = a_hi - two_pi if ok1 else s_lo
+                for c in range(slots):
+                    if not (ok1 if piece_of[c, leg] == 1 else ok0):
                         has[i, p, c] = False
 
 
@@ -333,8 +423,7 @@ def _sub_node_bounds(
     ``bounds`` (n, P, legs, 2, 2), each leg's two pieces (:func:`joint_pieces`),
     ``piece_of`` (slots, legs), the piece of each leg in a slot (see
     :func:`split_legs`), and ``has`` (n, P, slots), the sub-nodes whose every
-    leg's piece exists. Prismatic joints in one compiled pass, the others from
-    :func:`joint_pieces`."""
+    leg's piece exists. One compiled pass (:func:`_piece_bounds`)."""
     n, n_post, n_legs = angles_lo.shape
     split = split_legs(limits)
     slots = 1 << len(split)
@@ -343,24 +432,20 @@ def _sub_node_bounds(
         piece_of[:, i] = (np.arange(slots) >> split.index(i)) & 1
     bounds = np.empty((n, n_post, n_legs, 2, 2))
     has = np.ones((n, n_post, slots), dtype=bool)
-    strokes = np.array([lim.prismatic and not lim.periodic for lim in limits], dtype=bool)
-    if strokes.any():
-        _stroke_bounds(
-            np.ascontiguousarray(angles_lo, dtype=np.float64),
-            np.ascontiguousarray(angles_hi, dtype=np.float64),
-            strokes,
-            np.array([float(lim.lo) for lim in limits]),
-            np.array([float(lim.hi) for lim in limits]),
-            bounds,
-            has,
-        )
-    for i in np.flatnonzero(~strokes).tolist():
-        lo, hi, ok = joint_pieces(angles_lo[:, :, i], angles_hi[:, :, i], limits[i])
-        for k in range(2):
-            bounds[:, :, i, k, 0] = lo[k]
-            bounds[:, :, i, k, 1] = hi[k]
-        for c in range(slots):
-            has[:, :, c] &= ok[piece_of[c, i]]
+    kinds = np.array(
+        [_FREE if lim.periodic else _STROKE if lim.prismatic else _REVOLUTE for lim in limits],
+        dtype=np.int64,
+    )
+    _piece_bounds(
+        np.ascontiguousarray(angles_lo, dtype=np.float64),
+        np.ascontiguousarray(angles_hi, dtype=np.float64),
+        kinds,
+        np.array([float(lim.lo) for lim in limits]),
+        np.array([float(lim.hi) for lim in limits]),
+        piece_of,
+        bounds,
+        has,
+    )
     return bounds, piece_of, has
 
 
@@ -380,6 +465,7 @@ def region_graph(
     cross_serial: bool = True,
     limits: tuple[JointLimit, ...] | None = None,
     reachable_contact: NDArray[np.bool_] | None = None,
+    seed_certain: bool = True,
 ) -> RegionGraph:
     """Build both graphs from a sheet table and the touching leaf pairs.
 
@@ -388,6 +474,9 @@ def region_graph(
     aspects (det A and det B of constant sign). ``reachable_contact`` says, per
     pair, that the two leaves' common boundary holds a pose every leg reaches:
     two certified fold groups of one posture then share a configuration there.
+    With ``seed_certain`` (the default) the possible graphs start from the
+    certain graph's components (see :func:`_possible_labels_both`): the same
+    components, found sooner.
     """
     n, n_post = table.status.shape
     if limits is None:
@@ -437,9 +526,11 @@ def region_graph(
     # both signs from one pass over the pairs
     alive = np.stack([table.may_hold(s) for s in (1, -1)])
     taken = (alive[:, :, :, None] & has[None]).reshape(2, -1)
+    seeds = certain.reshape(n, n_post) if seed_certain else np.full((n, n_post), -1)
     possible, counts = _possible_labels_both(
-        pairs, alive, has, bounds, piece_of, pq, same_leaf, taken, _TOL
-    )
+        pairs, alive, has, bounds, piece_of, pq, same_leaf, taken, _TOL, seeds,
+        np.ascontiguousarray(table.sign),
+    )  # fmt: skip
     return RegionGraph(
         certain=certain.reshape(n, n_post),
         possible=possible.reshape(2, n, n_post * slots),

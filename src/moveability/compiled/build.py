@@ -197,16 +197,16 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.mechanisms._delta_kernels.mean_value_bounds": [
         (R2, R2, array(F8, 3), array(I8), array(F8, 4), R2, W1, W1)
     ],
-    "moveability.analysis.regions._stroke_bounds": [
+    "moveability.analysis.regions._piece_bounds": [
         (
-            array(F8, 3), array(F8, 3), array(B1), array(F8), array(F8),
+            array(F8, 3), array(F8, 3), array(I8), array(F8), array(F8), array(I8, 2),
             array(F8, 5, out=True), array(B1, 3, out=True),
         )
     ],
     "moveability.analysis.regions._possible_labels_both": [
         (
             array(I8, 2), array(B1, 3), array(B1, 3), array(F8, 5), array(I8, 2),
-            array(I8, 2), array(B1, 2), array(B1, 2), F8,
+            array(I8, 2), array(B1, 2), array(B1, 2), F8, array(I8, 2), array("int8", 2),
         )
     ],
     "moveability.hypertree._kernels.mark_sources": [
