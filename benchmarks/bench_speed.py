@@ -24,6 +24,12 @@ comparisons printed, each with its target (printed, never asserted):
    (``scipy.ndimage.label``, then a union-find across the faces phi = -pi, pi).
    Target: regions / numpy <= 0.5. ``--no-resolve`` (the plain pass) is timed
    too.
+
+   The command line runs OpenBLAS on one thread (``OPENBLAS_NUM_THREADS=1``
+   unless the user set it): its thread pool is not started at numpy's import.
+   For 1 and 2 the grid is also run in that environment, and that ratio is
+   printed too: the part of the gain that is only the thread pool's start is
+   then plain to see.
 3. ``analyze`` of the user-defined five-bar (examples/five-bar-custom.toml,
    its [bounds] set to the box the built-in's analysis subdivides, so that
    both split the same cells) against the built-in one, both at precision
@@ -69,6 +75,9 @@ TINY = 1e-4
 #: before its first leaf: the ahead-of-time extension's, or numba's (its import,
 #: its initialisation and one cached kernel) when the extension is missing or stale
 KERNEL_FLOOR = "from moveability.intervals import next_below; next_below(1.0)"
+#: the environment the command line gives itself (moveability.cli): OpenBLAS on one
+#: thread; the numpy grids are also run so, for a second ratio
+ONE_BLAS_THREAD = {"OPENBLAS_NUM_THREADS": "1"}
 #: which kernels a process of the package runs (moveability.compiled.MODE) and why
 KERNEL_MODE = "import moveability.compiled as c; print(c.MODE, '-', c.REASON)"
 
@@ -311,11 +320,15 @@ def child(kind: str, args: list[Any]) -> None:
 
 
 # ------------------------------------------------------------- processes
-def run_process(cmd: Sequence[str]) -> tuple[float, float, str]:
-    """Wall seconds, peak resident MiB (the child's own) and stdout of a command."""
+def run_process(
+    cmd: Sequence[str], env: dict[str, str] | None = None
+) -> tuple[float, float, str]:
+    """Wall seconds, peak resident MiB (the child's own) and stdout of a command
+    (with ``env`` added to this process' environment)."""
+    full = None if env is None else {**os.environ, **env}
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
         start = time.perf_counter()
-        proc = subprocess.Popen(list(cmd), stdout=out, stderr=err)
+        proc = subprocess.Popen(list(cmd), stdout=out, stderr=err, env=full)
         _, status, usage = os.wait4(proc.pid, 0)
         wall = time.perf_counter() - start
         proc.returncode = os.waitstatus_to_exitcode(status)
@@ -327,10 +340,12 @@ def run_process(cmd: Sequence[str]) -> tuple[float, float, str]:
         return wall, usage.ru_maxrss / 1024, out.read().decode()
 
 
-def run_case(kind: str, *args: Any) -> dict[str, Any]:
-    """One case of :func:`child` in a fresh process (arguments passed as JSON); adds
-    the process' wall time."""
-    wall, _, text = run_process([sys.executable, __file__, "--case", kind, json.dumps(args)])
+def run_case(kind: str, *args: Any, env: dict[str, str] | None = None) -> dict[str, Any]:
+    """One case of :func:`child` in a fresh process (arguments passed as JSON, ``env``
+    added to its environment); adds the process' wall time."""
+    wall, _, text = run_process(
+        [sys.executable, __file__, "--case", kind, json.dumps(args)], env=env
+    )
     out: dict[str, Any] = json.loads(text.strip().splitlines()[-1])
     out["wall"] = wall
     return out
@@ -462,6 +477,15 @@ def case_five_bar(eps: float) -> None:
     print(indent(timing_rows(rows)))
     print(ratio_line("regions / numpy (processes)", cert["wall"], grid["wall"], 0.5))
     print(ratio_line("regions / numpy at the analysis' cells", cert["wall"], fine["wall"], 0.5))
+    single = run_case("five-bar-grid", params, eps, env=ONE_BLAS_THREAD)
+    print(
+        ratio_line("regions / numpy, its grid too on one BLAS thread", cert["wall"],
+                   single["wall"], 0.5)
+    )  # fmt: skip
+    print(
+        "  (the command line runs OpenBLAS on one thread; the grid so takes "
+        f"{single['wall']:.2f} s)"
+    )
     print("  (the analysis' cells are the box's span over a power of two, at most the")
     print("  precision: finer than h along both axes here)")
     print(agreement(cert, grid, "area"))
@@ -521,6 +545,12 @@ def case_three_rpr(parts: int) -> None:
     print(indent(timing_rows(rows)))
     print(ratio_line("regions / numpy (processes)", cert["wall"], grid["wall"], 0.5))
     print(ratio_line("--no-resolve / numpy (processes)", plain["wall"], grid["wall"], 0.5))
+    single = run_case("three-rpr-grid", params, parts, env=ONE_BLAS_THREAD)
+    print(
+        ratio_line("regions / numpy, its grid too on one BLAS thread", cert["wall"],
+                   single["wall"], 0.5)
+    )  # fmt: skip
+    print(f"  (the grid on one BLAS thread takes {single['wall']:.2f} s)")
     count = plain["count"]
     print(
         f"  --no-resolve: {len(plain['regions'])} regions listed, count "

@@ -16,7 +16,9 @@ The last three need the extension (``make kernels``) and are skipped without it.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import inspect
+import marshal
 import shutil
 import subprocess
 import sys
@@ -200,3 +202,63 @@ def test_aot_and_jit_agree_bit_for_bit(seed: int):
     base._det_bounds(lo, hi, *outputs[0])
     compiled.jit_of(base._det_bounds)(lo, hi, *outputs[1])
     assert same(outputs[0], outputs[1])
+
+
+@aot
+def test_every_wrapper_comes_compiled_from_the_build():
+    """The build wrote the wrappers' code (the table of the file CALLS): each
+    kernel's wrapper source, as a process makes it from the manifest, is there,
+    and its code is what compiling that source gives."""
+    table = compiled._compiled_calls()
+    manifest = compiled._MANIFEST
+    assert manifest is not None and table
+    for name, variants in manifest["kernels"].items():
+        if not any(hasattr(compiled._EXT, symbol) for symbol, _ in variants):
+            continue
+        source, _ = compiled.wrapper_source([specs for _, specs in variants])
+        key = (compiled.wrapper_filename(name), source)
+        assert key in table, name
+        assert marshal.loads(table[key]).co_code == compile(source, key[0], "exec").co_code
+
+
+def test_a_missing_or_foreign_calls_table_compiles_the_wrappers(tmp_path: Path):
+    """write_calls writes what the table reader takes back; a file of another
+    Python (its magic number) or no file at all gives no entry: the wrappers are
+    then compiled in the process."""
+    source, _ = compiled.wrapper_source([["float64", "float64"]])
+    path = tmp_path / "calls"
+    assert compiled.write_calls({"m.k": source}, path) == 1
+    data = path.read_bytes()
+    assert data.startswith(importlib.util.MAGIC_NUMBER)
+    real = compiled.CALLS
+    try:
+        compiled.CALLS = path
+        compiled._compiled_calls.cache_clear()
+        assert set(compiled._compiled_calls()) == {(compiled.wrapper_filename("m.k"), source)}
+        key = (compiled.wrapper_filename("m.k"), source)
+        assert compiled._known_code(*key) is not None
+        # an entry that is not marshalled code is not taken
+        path.write_bytes(importlib.util.MAGIC_NUMBER + marshal.dumps({key: b"junk"}))
+        compiled._compiled_calls.cache_clear()
+        assert compiled._known_code(*key) is None
+        path.write_bytes(b"\0\0\0\0" + data[4:])
+        compiled._compiled_calls.cache_clear()
+        assert compiled._compiled_calls() == {}
+        path.unlink()
+        compiled._compiled_calls.cache_clear()
+        assert compiled._compiled_calls() == {}
+    finally:
+        compiled.CALLS = real
+        compiled._compiled_calls.cache_clear()
+
+
+@aot
+def test_an_up_to_date_build_writes_a_missing_calls_table(tmp_path: Path, monkeypatch):
+    """An extension built before the wrappers' table existed: the build, finding
+    it up to date, writes the table alone (the same entries)."""
+    path = tmp_path / "_aot.calls"
+    monkeypatch.setattr(build, "CALLS", path)
+    assert build.build() == ""
+    table = compiled._compiled_calls()
+    written = marshal.loads(path.read_bytes()[len(importlib.util.MAGIC_NUMBER) :])
+    assert set(written) == set(table)

@@ -36,6 +36,7 @@ import hashlib
 import importlib
 import importlib.util
 import json
+import marshal
 import os
 import sys
 import types
@@ -46,6 +47,7 @@ from typing import Any, TypeVar, overload
 import numpy as np
 
 __all__ = [
+    "CALLS",
     "EXTENSION",
     "FORMAT",
     "KERNELS",
@@ -58,6 +60,9 @@ __all__ = [
     "kernel",
     "manifest_problem",
     "source_hashes",
+    "wrapper_filename",
+    "wrapper_source",
+    "write_calls",
 ]
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -345,16 +350,13 @@ class _Checks:
         return f"{self.flags(var)}.c_contiguous"
 
 
-def _wrapper(fn: Callable[..., Any], info: _Kernel, specs: list[list[Any]]) -> Any:
-    """A function that calls the first AOT variant whose argument types the
-    arguments have, else the JIT kernel; and ``match(*args)``, the index of that
-    variant (-1: none)."""
+def wrapper_source(specs: list[list[Any]]) -> tuple[str, dict[str, Any]]:
+    """The source of a kernel's AOT wrapper for variants of argument types
+    ``specs`` (see :func:`_wrapper`), and the objects it refers to but the
+    variants (``_variant<i>``) and the JIT fallback (``_jit``)."""
     checks = _Checks()
-    scope = checks.scope
-    scope["_jit"] = functools.partial(_fallback, info)
     body, match = [], []
     for i, arg_specs in enumerate(specs):
-        scope[f"_variant{i}"] = info.variants[i]
         try:
             conds = [f"len(args) == {len(arg_specs)}"]
             conds += [checks.types(f"args[{j}]", s) for j, s in enumerate(arg_specs)]
@@ -381,7 +383,78 @@ def _wrapper(fn: Callable[..., Any], info: _Kernel, specs: list[list[Any]]) -> A
     source = "\n".join(
         [*head, *body, "    return _jit(*args)", "def match(*args):", *match, "    return -1"]
     )
-    exec(compile(source, f"<kernel {fn.__module__}.{fn.__qualname__}>", "exec"), scope)
+    return source, checks.scope
+
+
+def wrapper_filename(name: str) -> str:
+    """The file name of kernel ``name``'s wrapper code (in tracebacks)."""
+    return f"<kernel {name}>"
+
+
+#: the wrappers' code objects compiled by the build, beside the extension
+CALLS = Path(__file__).resolve().parent / "_aot.calls"
+
+
+@functools.cache
+def _compiled_calls() -> dict[tuple[str, str], bytes]:
+    """The table (file name, source) -> marshalled code that the build wrote (empty
+    when it is missing or was written by another Python): a process compiles no
+    wrapper whose source is there, and reads the code of those it calls alone."""
+    try:
+        data = CALLS.read_bytes()
+    except OSError:
+        return {}
+    magic = importlib.util.MAGIC_NUMBER
+    if not data.startswith(magic):
+        return {}
+    try:
+        table = marshal.loads(data[len(magic) :])
+    except (EOFError, ValueError, TypeError):
+        return {}
+    return table if isinstance(table, dict) else {}
+
+
+def _known_code(filename: str, source: str) -> types.CodeType | None:
+    """The build's code of a wrapper source, if the table holds it (and it reads)."""
+    known = _compiled_calls().get((filename, source))
+    if not isinstance(known, bytes):
+        return None
+    try:
+        code = marshal.loads(known)
+    except (EOFError, ValueError, TypeError):
+        return None
+    return code if isinstance(code, types.CodeType) else None
+
+
+def write_calls(sources: dict[str, str], path: Path = CALLS) -> int:
+    """Compile each wrapper source (kernel name -> source) and write the table
+    :func:`_compiled_calls` reads, atomically; the number written."""
+    table = {
+        (wrapper_filename(name), source): marshal.dumps(
+            compile(source, wrapper_filename(name), "exec")
+        )
+        for name, source in sources.items()
+    }
+    temporary = path.with_name(path.name + f".{os.getpid()}.tmp")
+    temporary.write_bytes(importlib.util.MAGIC_NUMBER + marshal.dumps(table))
+    os.replace(temporary, path)
+    return len(table)
+
+
+def _wrapper(fn: Callable[..., Any], info: _Kernel, specs: list[list[Any]]) -> Any:
+    """A function that calls the first AOT variant whose argument types the
+    arguments have, else the JIT kernel; and ``match(*args)``, the index of that
+    variant (-1: none). Its code comes from the build's table when it is there
+    (:func:`write_calls`), else is compiled now."""
+    source, scope = wrapper_source(specs)
+    scope["_jit"] = functools.partial(_fallback, info)
+    for i in range(len(specs)):
+        scope[f"_variant{i}"] = info.variants[i]
+    filename = wrapper_filename(f"{fn.__module__}.{fn.__qualname__}")
+    code = _known_code(filename, source)
+    if code is None:
+        code = compile(source, filename, "exec")
+    exec(code, scope)
     call = scope["call"]
     functools.update_wrapper(call, fn)
     call.py_func = fn

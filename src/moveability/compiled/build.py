@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from . import (
+    CALLS,
     EXTENSION,
     FORMAT,
     KERNELS,
@@ -48,6 +49,8 @@ from . import (
     jit_of,
     manifest_problem,
     source_hashes,
+    wrapper_source,
+    write_calls,
 )
 
 __all__ = ["EXPORTS", "build", "main"]
@@ -459,6 +462,16 @@ def _compile(
             AOTCPUCodegen._customize_tm_features = real_features  # type: ignore[method-assign]
 
 
+def _wrapper_sources(manifest: dict[str, Any], left_out: dict[str, str]) -> dict[str, str]:
+    """Each compiled kernel's wrapper source, as a process makes it from the
+    manifest (:func:`moveability.compiled.wrapper_source`)."""
+    return {
+        name: wrapper_source([list(s) for _, s in variants])[0]
+        for name, variants in manifest["kernels"].items()
+        if name not in left_out
+    }
+
+
 def build(force: bool = False, generic: bool = False) -> str:
     """Compile the extension (unless it is up to date); the line to print. For
     this CPU, as the JIT, unless ``generic`` (or the CPU cannot be identified):
@@ -466,6 +479,10 @@ def build(force: bool = False, generic: bool = False) -> str:
     x86-64)."""
     start = time.perf_counter()
     if not force and up_to_date() is None:
+        if not CALLS.exists():
+            # an extension built before the wrappers' table was: write it now
+            built = json.loads(importlib.import_module(EXTENSION).manifest())
+            write_calls(_wrapper_sources(built, {}), CALLS)
         return ""
     with tempfile.TemporaryDirectory(prefix="moveability-aot-") as tmp:
         # a cache of its own: everything compiled here, for the generic CPU
@@ -503,9 +520,11 @@ def build(force: bool = False, generic: bool = False) -> str:
                 manifest["kernels"].setdefault(name, []).append([symbol, list(specs)])
         manifest["sources"] = source_hashes(_sources(modules))
         left_out = _compile(entries, manifest, tmp)
-        (built,) = Path(tmp).glob("_aot*")
-        target = Path(__file__).resolve().parent / built.name
-        os.replace(built, target)  # atomic: a running process keeps the old file
+        (extension,) = Path(tmp).glob("_aot*")
+        target = Path(__file__).resolve().parent / extension.name
+        # the kernels' wrappers compiled once here, not in every process
+        write_calls(_wrapper_sources(manifest, left_out), CALLS)
+        os.replace(extension, target)  # atomic: a running process keeps the old file
     for name, why in left_out.items():
         print(f"moveability: kernel {name} left to the JIT: {why}", file=sys.stderr)
     kept = [v for k, v in manifest["kernels"].items() if k not in left_out]
