@@ -592,14 +592,15 @@ def _node_flows(
             return bits, exists, faces
         margins = per_posture[0] if n_present == 1 else None
 
+    # the boxes of each leg's branches
+    boxes = [{b: (_take(blo, at), _take(bhi, at)) for b, at in groups[i]} for i in range(n_legs)]
+
     def legs_call(i: int, method: str, *args: Any) -> Any:
         """Leg ``i``'s ``method(lo, hi, branch, *args)`` over every row, one call
         per branch (``args`` over rows are taken at the branch's rows)."""
         call = getattr(mechanism.legs[i], method)
         return _by_branch(
-            groups[i],
-            m,
-            lambda b, at: call(_take(blo, at), _take(bhi, at), b, *[_take(x, at) for x in args]),
+            groups[i], m, lambda b, at: call(*boxes[i][b], b, *[_take(x, at) for x in args])
         )
 
     with quiet():
@@ -829,20 +830,25 @@ def _adapted_flows(
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(good, v / np.where(good, norm, 1.0), 0.0)
 
+    # the unit normals, the same for every slot
+    det_unit = {s: np.where(near_singular[:, None], unit(s * det_normal), 0.0) for s in (1, -1)}
+    joint_unit = [unit(joint_normal[i]) for i in range(n_legs)]
+    beyond_unit = {
+        s: [(rise, fall, unit(normal)) for rise, fall, normal in beyond[s]] for s in (1, -1)
+    }
     for c in range(len(combos)):
         for row, s in enumerate((1, -1)):
-            normals = [np.where(near_singular[:, None], unit(s * det_normal), 0.0)]
+            normals = [det_unit[s]]
             for i in range(n_legs):
                 _, lower, upper = near[i]
                 j = combos[c][i]
                 normals.append(
-                    np.where(lower[j][:, None], unit(joint_normal[i]), 0.0)
-                    - np.where(upper[j][:, None], unit(joint_normal[i]), 0.0)
+                    np.where(lower[j][:, None], joint_unit[i], 0.0)
+                    - np.where(upper[j][:, None], joint_unit[i], 0.0)
                 )
-            for rise, fall, normal in beyond[s]:
+            for rise, fall, normal in beyond_unit[s]:
                 normals.append(
-                    np.where(rise[:, None], unit(normal), 0.0)
-                    - np.where(fall[:, None], unit(normal), 0.0)
+                    np.where(rise[:, None], normal, 0.0) - np.where(fall[:, None], normal, 0.0)
                 )
             direction = unit(into_corner(np.stack(normals, axis=1)))
             moving = usable & (np.abs(direction).sum(axis=1) > 0)
