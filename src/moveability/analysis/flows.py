@@ -305,7 +305,8 @@ def _branch_groups(branches: NDArray[np.int64]) -> _Groups:
     >>> _branch_groups(np.array([1, 1]))
     [(1, None)]
     """
-    values = np.unique(branches)
+    # (np.unique would import numpy.ma, some milliseconds, on its first call)
+    values = np.flatnonzero(np.bincount(branches))
     if values.size == 1:
         return [(int(values[0]), None)]
     return [(int(b), np.flatnonzero(branches == b)) for b in values]
@@ -526,9 +527,13 @@ def _node_flows(
     rows, post = nodes[:, 0], nodes[:, 1]
     m = rows.size
     postures = mechanism.postures
-    present, post_row = np.unique(post, return_inverse=True)
-    post_row = post_row.reshape(-1)
+    # the postures present, and each row's among them
+    index = np.zeros(postures.shape[0], dtype=np.int64)
+    index[post] = 1
+    present = np.flatnonzero(index)
     n_present = present.size
+    index[present] = np.arange(n_present)
+    post_row = index[post]
     at_posture = (
         [None] if n_present == 1 else [np.flatnonzero(post_row == j) for j in range(n_present)]
     )
