@@ -346,17 +346,21 @@ def _fields(
     hi: Array,
     angles: list[Interval] | None = None,
     groups: list[_Groups] | None = None,
+    axes_only: bool = False,
 ) -> list[_Field]:
     """Constant directions, then turns about the legs' turn centres (planar poses;
     ``angles`` are the joints' enclosures over the boxes and ``groups`` the rows
-    of each leg's branches, for centres that move with the joint)."""
+    of each leg's branches, for centres that move with the joint). With
+    ``axes_only`` the ``2 k`` directions along the pose axes alone (the first)."""
     n, k = lo.shape
     vectors, faces = flow_directions(k)
+    if axes_only:
+        vectors, faces = vectors[: 2 * k], faces[: 2 * k]
     out = []
     for vector, fl in zip(vectors, faces, strict=True):
         mask = np.full(n, sum(1 << f for f in fl), dtype=np.uint8)
         out.append(_Field(None, mask, vector=vector))
-    if k not in (2, 3):
+    if k not in (2, 3) or axes_only:
         return out
     for i, leg in enumerate(mechanism.legs):
         if not hasattr(leg, "turn_centre") or len(leg.turn_centre(Interval(lo[:0, 0]))) != 2:
@@ -544,17 +548,20 @@ def _node_flows(
         Interval(table.angles_lo[rows, post, i], table.angles_hi[rows, post, i])
         for i in range(n_legs)
     ]
-    fields = _fields(mechanism, blo, bhi, angles, groups)
-    n_fixed = len(fields)
+    if axes_only:
+        # the first fields are the axis directions (see flow_directions); the
+        # fixed flows are the same for every leaf: counted on no leaf at all
+        n_fixed = len(_fields(mechanism, lo[:0], hi[:0]))
+        fields = _fields(mechanism, blo, bhi, axes_only=True)
+    else:
+        fields = _fields(mechanism, blo, bhi, angles, groups)
+        n_fixed = len(fields)
     n_flows = n_fixed + 2 * slots
     if n_flows > 64:
         raise ValueError("at most 64 flows per slot")
     bits = np.zeros((2, m, slots), dtype=np.uint64)
     exists = np.zeros((m, slots), dtype=bool)
     faces = np.zeros((n_flows, m), dtype=np.uint8)
-    if axes_only:
-        # the first fields are the axis directions (see flow_directions)
-        fields = fields[: 2 * lo.shape[1]]
     for ff, field in enumerate(fields):
         faces[ff] = field.faces
     combos = [
@@ -577,25 +584,30 @@ def _node_flows(
         return np.errstate(invalid="ignore", divide="ignore", over="ignore")
 
     if margins is _UNSET:
-        with quiet():
-            per_posture = [
-                mechanism.constraint_margins(
+
+        def enclosed(at: NDArray[np.intp] | None, p: int) -> Any:
+            """The constraints' margins over the rows ``at`` (None: all) of posture ``p``."""
+            with quiet():
+                return mechanism.constraint_margins(
                     _take(blo, at),
                     _take(bhi, at),
                     [_take(a, at) for a in angles],
-                    int(p),
+                    p,
                     _take(regular, at),
                 )
-                for p, at in zip(present, at_posture, strict=True)
-            ]
-        if n_present > 1 and any(mg is not None for mg in per_posture):
+
+        # a mechanism has constraints or not, whatever the boxes: asked on none
+        margins = enclosed(np.zeros(0, dtype=np.intp), int(present[0]))
+        if margins is not None and n_present > 1:
             # the constraints' margins hold one posture's branches: one pass each
-            for at, mg in zip(at_posture, per_posture, strict=True):
+            for at, p in zip(at_posture, present, strict=True):
                 assert at is not None
-                sub = _node_flows(mechanism, lo, hi, table, nodes[at], axes_only, mg)
+                own = enclosed(at, int(p))
+                sub = _node_flows(mechanism, lo, hi, table, nodes[at], axes_only, own)
                 bits[:, at], exists[at], faces[:, at] = sub
             return bits, exists, faces
-        margins = per_posture[0] if n_present == 1 else None
+        if margins is not None:
+            margins = enclosed(None, int(present[0]))
 
     # the boxes of each leg's branches
     boxes = [{b: (_take(blo, at), _take(bhi, at)) for b, at in groups[i]} for i in range(n_legs)]
