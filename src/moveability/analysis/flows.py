@@ -284,31 +284,97 @@ class _Field:
         return [Interval(np.full(n, v)) for v in self.vector]
 
 
+#: the groups of rows of one leg's branches: ``(branch, rows)``, ``rows`` None for all
+_Groups = list[tuple[int, NDArray[np.intp] | None]]
+
+
+def _take(x: Any, at: NDArray[np.intp] | None) -> Any:
+    """``x`` (an array or :class:`Interval` over rows) at the rows ``at`` (None: all);
+    a number as it is."""
+    return x if at is None or isinstance(x, (int, float)) else x[at]
+
+
+def _branch_groups(branches: NDArray[np.int64]) -> _Groups:
+    """The rows of each branch in ``branches`` (one per row), in increasing order of
+    branch; one group of all the rows (None) when they share one branch.
+
+    Examples
+    --------
+    >>> [(b, None if at is None else at.tolist()) for b, at in _branch_groups(np.array([1, 0, 1]))]
+    [(0, [1]), (1, [0, 2])]
+    >>> _branch_groups(np.array([1, 1]))
+    [(1, None)]
+    """
+    # (np.unique would import numpy.ma, some milliseconds, on its first call)
+    values = np.flatnonzero(np.bincount(branches))
+    if values.size == 1:
+        return [(int(values[0]), None)]
+    return [(int(b), np.flatnonzero(branches == b)) for b in values]
+
+
+def _joined(parts: list[tuple[NDArray[np.intp] | None, Any]], n: int) -> Any:
+    """Results over groups of rows (``(rows, result)``; arrays, :class:`Interval`\\ s,
+    lists or tuples of them, one value per row or one for all) put together over
+    ``n`` rows, each row's from its group (rows of no group: zero)."""
+    if len(parts) == 1 and parts[0][0] is None:
+        return parts[0][1]
+    first = parts[0][1]
+    if isinstance(first, Interval):
+        return Interval(
+            _joined([(at, v.lo) for at, v in parts], n), _joined([(at, v.hi) for at, v in parts], n)
+        )
+    if isinstance(first, (list, tuple)):
+        return type(first)(
+            _joined([(at, v[j]) for at, v in parts], n) for j in range(len(first))
+        )
+    values = [np.asarray(v) for _, v in parts]
+    out = np.zeros(n, dtype=np.result_type(*values))
+    for (at, _), v in zip(parts, values, strict=True):
+        out[slice(None) if at is None else at] = v
+    return out
+
+
+def _by_branch(groups: _Groups, n: int, call: Any) -> Any:
+    """``call(branch, rows)`` once per group of rows (see :func:`_branch_groups`),
+    the results put together row by row (:func:`_joined`)."""
+    return _joined([(at, call(b, at)) for b, at in groups], n)
+
+
 def _fields(
     mechanism: Mechanism,
     lo: Array,
     hi: Array,
     angles: list[Interval] | None = None,
-    branches: NDArray[np.int64] | None = None,
+    groups: list[_Groups] | None = None,
+    axes_only: bool = False,
 ) -> list[_Field]:
     """Constant directions, then turns about the legs' turn centres (planar poses;
-    ``angles`` are the joints' enclosures over the boxes and ``branches`` the
-    posture's, for centres that move with the joint)."""
+    ``angles`` are the joints' enclosures over the boxes and ``groups`` the rows
+    of each leg's branches, for centres that move with the joint). With
+    ``axes_only`` the ``2 k`` directions along the pose axes alone (the first)."""
     n, k = lo.shape
     vectors, faces = flow_directions(k)
+    if axes_only:
+        vectors, faces = vectors[: 2 * k], faces[: 2 * k]
     out = []
     for vector, fl in zip(vectors, faces, strict=True):
         mask = np.full(n, sum(1 << f for f in fl), dtype=np.uint8)
         out.append(_Field(None, mask, vector=vector))
-    if k not in (2, 3):
+    if k not in (2, 3) or axes_only:
         return out
     for i, leg in enumerate(mechanism.legs):
         if not hasattr(leg, "turn_centre") or len(leg.turn_centre(Interval(lo[:0, 0]))) != 2:
             continue
         angle = angles[i] if angles is not None else Interval(np.zeros(n))
         centre = leg.turn_centre(angle)
-        if hasattr(leg, "turn_arm") and branches is not None:
-            rel_x, rel_y = leg.turn_arm(lo, hi, int(branches[i]), angle)
+        if hasattr(leg, "turn_arm") and groups is not None:
+            rel_x, rel_y = _by_branch(
+                groups[i],
+                n,
+                lambda b, at, leg=leg, angle=angle: leg.turn_arm(
+                    _take(lo, at), _take(hi, at), b, _take(angle, at)
+                ),
+            )
         else:
             rel_x = Interval(lo[:, 0], hi[:, 0]) - centre[0]
             rel_y = Interval(lo[:, 1], hi[:, 1]) - centre[1]
@@ -375,21 +441,16 @@ def flow_conditions(
         Bit ``j`` set where flow ``f`` may leave the node's leaf through face ``j``.
     """
     slots = 1 << len(split_legs(mechanism.limits))
-    # the fixed flows are the same for every leaf: count them on no leaf at all
-    n_flows = len(_fields(mechanism, lo[:0], hi[:0])) + 2 * slots
     m = nodes.shape[0]
-    bits = np.zeros((2, m, slots), dtype=np.uint64)
-    exists = np.zeros((m, slots), dtype=bool)
-    faces = np.zeros((n_flows, m), dtype=np.uint8)
-    for p in range(table.status.shape[1]):
-        at = np.flatnonzero(nodes[:, 1] == p)
-        if not at.size:
-            continue
-        flows, ex, fc = _posture_flows(mechanism, lo, hi, table, nodes[at, 0], p, axes_only)
-        bits[:, at] = _pack_bits(flows)
-        exists[at] = ex
-        faces[:, at] = fc
-    return bits, exists, faces
+    if not m:
+        # the fixed flows are the same for every leaf: count them on no leaf at all
+        n_flows = len(_fields(mechanism, lo[:0], hi[:0])) + 2 * slots
+        return (
+            np.zeros((2, 0, slots), dtype=np.uint64),
+            np.zeros((0, slots), dtype=bool),
+            np.zeros((n_flows, 0), dtype=np.uint8),
+        )
+    return _node_flows(mechanism, lo, hi, table, nodes, axes_only)
 
 
 def _pack_bits(flags: NDArray[np.bool_]) -> NDArray[np.uint64]:
@@ -410,39 +471,99 @@ def _pack_bits(flags: NDArray[np.bool_]) -> NDArray[np.uint64]:
     return wide.view("<u8")[..., 0].astype(np.uint64)
 
 
-def _posture_flows(
+#: margins not yet enclosed (see :func:`_node_flows`)
+_UNSET: Any = object()
+
+
+def _bit(flags: NDArray[np.bool_], index: int) -> NDArray[np.uint64]:
+    """Bit ``index`` (below 64) set where ``flags`` hold.
+
+    Examples
+    --------
+    >>> _bit(np.array([True, False]), 3).tolist()
+    [8, 0]
+    """
+    return np.left_shift(np.asarray(flags, dtype=np.uint64), np.uint64(index))
+
+
+def _posture_any(
+    mask: NDArray[np.bool_], group: NDArray[np.intp], n_groups: int
+) -> NDArray[np.bool_]:
+    """Per row: whether ``mask`` holds on some row of its group (``group[r]`` in
+    ``range(n_groups)``).
+
+    Examples
+    --------
+    >>> _posture_any(np.array([True, False, False]), np.array([0, 0, 1]), 2).tolist()
+    [True, True, False]
+    """
+    hit = np.zeros(n_groups, dtype=bool)
+    hit[group[mask]] = True
+    return hit[group]
+
+
+def _node_flows(
     mechanism: Mechanism,
     lo: Array,
     hi: Array,
     table: SheetTable,
-    rows: NDArray[np.intp],
-    p: int,
+    nodes: NDArray[np.intp],
     axes_only: bool = False,
-) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.uint8]]:
-    """The flows of the nodes of posture ``p`` over leaves ``rows``:
-    ``(flows (2, n, slots, F), exists (n, slots), faces (F, n))``; with
-    ``axes_only`` the flows along the pose axes alone (the others clear)."""
+    margins: Any = _UNSET,
+) -> tuple[NDArray[np.uint64], NDArray[np.bool_], NDArray[np.uint8]]:
+    """The flows of the nodes ``nodes`` ((m, 2): leaf, posture; at least one), as
+    :func:`flow_conditions` returns them: ``(bits (2, m, slots), exists (m,
+    slots), faces (F, m))``; with ``axes_only`` the flows along the pose axes
+    alone (the others clear).
+
+    One pass over the nodes of every posture: each node takes its own posture's
+    joint enclosures, sign and det A, and the legs' branches enter through one
+    call of each leg's method per branch (its rows'). What the flows of a node
+    of one posture decide from the rows of that posture together (whether a
+    leg may fold on one of them, whether a leaf's own direction moves on one of
+    them) is decided per posture: every node's flows are those that its
+    posture's nodes alone give. With constraints beyond the paper (their
+    ``margins``, enclosed for one posture at a time) each posture is passed on
+    its own."""
     n_legs = len(mechanism.legs)
     split = split_legs(mechanism.limits)
     slots = 1 << len(split)
+    rows, post = nodes[:, 0], nodes[:, 1]
+    m = rows.size
+    postures = mechanism.postures
+    # the postures present, and each row's among them
+    index = np.zeros(postures.shape[0], dtype=np.int64)
+    index[post] = 1
+    present = np.flatnonzero(index)
+    n_present = present.size
+    index[present] = np.arange(n_present)
+    post_row = index[post]
+    at_posture = (
+        [None] if n_present == 1 else [np.flatnonzero(post_row == j) for j in range(n_present)]
+    )
     blo, bhi = lo[rows], hi[rows]
-    branches = mechanism.postures[p]
+    branches = postures[post]
+    groups = [_branch_groups(branches[:, i]) for i in range(n_legs)]
     angles = [
-        Interval(table.angles_lo[rows, p, i], table.angles_hi[rows, p, i]) for i in range(n_legs)
+        Interval(table.angles_lo[rows, post, i], table.angles_hi[rows, post, i])
+        for i in range(n_legs)
     ]
-    fields = _fields(mechanism, blo, bhi, angles, branches)
-    n_fixed = len(fields)
-    n_flows = n_fixed + 2 * slots
-    flows = np.zeros((2, rows.size, slots, n_flows), dtype=bool)
-    exists = np.zeros((rows.size, slots), dtype=bool)
-    faces = np.zeros((n_flows, rows.size), dtype=np.uint8)
     if axes_only:
-        # the first fields are the axis directions (see flow_directions)
-        fields = fields[: 2 * lo.shape[1]]
+        # the first fields are the axis directions (see flow_directions); the
+        # fixed flows are the same for every leaf: counted on no leaf at all
+        n_fixed = len(_fields(mechanism, lo[:0], hi[:0]))
+        fields = _fields(mechanism, blo, bhi, axes_only=True)
+    else:
+        fields = _fields(mechanism, blo, bhi, angles, groups)
+        n_fixed = len(fields)
+    n_flows = n_fixed + 2 * slots
+    if n_flows > 64:
+        raise ValueError("at most 64 flows per slot")
+    bits = np.zeros((2, m, slots), dtype=np.uint64)
+    exists = np.zeros((m, slots), dtype=bool)
+    faces = np.zeros((n_flows, m), dtype=np.uint8)
     for ff, field in enumerate(fields):
         faces[ff] = field.faces
-    if not rows.size:
-        return flows, exists, faces
     combos = [
         [(c >> split.index(i)) & 1 if i in split else 0 for i in range(n_legs)]
         for c in range(slots)
@@ -452,25 +573,70 @@ def _posture_flows(
         exists[:, c] = np.logical_and.reduce([pieces[i][0][combos[c][i]] for i in range(n_legs)])
     if not supports_flows(mechanism):
         # no flow: every piece that may exist stays open (none is attached)
-        return flows, exists, faces
+        return bits, exists, faces
     leg_status = table.leg_status[rows]
     regular = leg_status == REGULAR
     folding = ~regular & (leg_status != REACH_UNKNOWN) & (leg_status != REACH_OUT)
     usable = ~(leg_status == REACH_UNKNOWN).any(axis=1)
-    sign = table.sign[rows, p]
+    sign = table.sign[rows, post]
 
     def quiet() -> Any:
         return np.errstate(invalid="ignore", divide="ignore", over="ignore")
 
+    if margins is _UNSET:
+
+        def enclosed(at: NDArray[np.intp] | None, p: int) -> Any:
+            """The constraints' margins over the rows ``at`` (None: all) of posture ``p``."""
+            with quiet():
+                return mechanism.constraint_margins(
+                    _take(blo, at),
+                    _take(bhi, at),
+                    [_take(a, at) for a in angles],
+                    p,
+                    _take(regular, at),
+                )
+
+        # a mechanism has constraints or not, whatever the boxes: asked on none
+        margins = enclosed(np.zeros(0, dtype=np.intp), int(present[0]))
+        if margins is not None and n_present > 1:
+            # the constraints' margins hold one posture's branches: one pass each
+            for at, p in zip(at_posture, present, strict=True):
+                assert at is not None
+                own = enclosed(at, int(p))
+                sub = _node_flows(mechanism, lo, hi, table, nodes[at], axes_only, own)
+                bits[:, at], exists[at], faces[:, at] = sub
+            return bits, exists, faces
+        if margins is not None:
+            margins = enclosed(None, int(present[0]))
+
+    # the boxes of each leg's branches
+    boxes = [{b: (_take(blo, at), _take(bhi, at)) for b, at in groups[i]} for i in range(n_legs)]
+
+    def legs_call(i: int, method: str, *args: Any) -> Any:
+        """Leg ``i``'s ``method(lo, hi, branch, *args)`` over every row, one call
+        per branch (``args`` over rows are taken at the branch's rows)."""
+        call = getattr(mechanism.legs[i], method)
+        return _by_branch(
+            groups[i], m, lambda b, at: call(*boxes[i][b], b, *[_take(x, at) for x in args])
+        )
+
     with quiet():
-        gradients = [
-            leg.joint_gradient(blo, bhi, int(branches[i]), angles[i])  # type: ignore[attr-defined]
-            for i, leg in enumerate(mechanism.legs)
-        ]
+        gradients = [legs_call(i, "joint_gradient", angles[i]) for i in range(n_legs)]
         known = mechanism.rows_and_partials(blo, bhi, angles)
-    fold_cache: list[dict[str, Any]] = [{} for _ in range(n_legs)]
-    with quiet():
-        margins = mechanism.constraint_margins(blo, bhi, angles, p, regular)
+    # where the nodes of a posture hold a leg that may fold, the joint's rate comes
+    # from the leg's fold_flow on the rows where it is not regular: those rows of
+    # each branch (with a cache of each: its rows stay the same), the others steady
+    steady_leg: list[NDArray[np.bool_]] = []
+    fold_rows: list[list[tuple[Any, ...]]] = []
+    for i in range(n_legs):
+        steady = regular[:, i] | ~_posture_any(folding[:, i], post_row, n_present)
+        steady_leg.append(steady)
+        per_branch: list[tuple[Any, ...]] = []
+        for b, at in groups[i]:
+            folds = np.flatnonzero(~steady) if at is None else at[~steady[at]]
+            if folds.size:
+                per_branch.append((b, folds, blo[folds], bhi[folds], leg_status[folds, i], {}))
+        fold_rows.append(per_branch)
     for ff, field in enumerate(fields):
         velocity = field.velocity
         with quiet():
@@ -480,28 +646,33 @@ def _posture_flows(
                 if i == field.leg:
                     # the leg keeps its reach; its joint moves at the leg's turn rate
                     speed = field.turn * float(leg.turn_rate)  # type: ignore[attr-defined]
-                    rates.append(Interval(np.full(rows.size, speed)))
-                    rising.append(np.full(rows.size, speed >= 0))
-                    falling.append(np.full(rows.size, speed <= 0))
+                    rates.append(Interval(np.full(m, speed)))
+                    rising.append(np.full(m, speed >= 0))
+                    falling.append(np.full(m, speed <= 0))
                     # it keeps its distance to the fold (cross_serial or not)
-                    keeps = leg.turn_keeps(blo, bhi, int(branches[i]), field.turn)  # type: ignore[attr-defined]
+                    keeps = legs_call(i, "turn_keeps", field.turn)
                     ok &= regular[:, i] | keeps
                     continue
                 rate = _dot(gradients[i], velocity)
-                if folding[:, i].any():
+                if fold_rows[i]:
                     if hasattr(leg, "fold_flow"):
-                        keeps, fold_rate = leg.fold_flow(
-                            blo, bhi, leg_status[:, i], int(branches[i]), velocity,
-                            cache=fold_cache[i],
-                        )
+                        keeps, fold_rate = _joined(
+                            [
+                                (at, leg.fold_flow(
+                                    glo, ghi, gstatus, b, [v[at] for v in velocity], cache=cache
+                                ))
+                                for b, at, glo, ghi, gstatus, cache in fold_rows[i]
+                            ],
+                            m,
+                        )  # fmt: skip
                     else:
-                        keeps = np.zeros(rows.size, dtype=bool)
-                        fold_rate = Interval(np.full(rows.size, -np.inf), np.inf)
-                    ok &= regular[:, i] | keeps
+                        keeps = np.zeros(m, dtype=bool)
+                        fold_rate = Interval(np.full(m, -np.inf), np.inf)
+                    ok &= steady_leg[i] | keeps
                     # where the leg folds its joint's rate is unbounded: the leg's own enclosure
                     rate = Interval(
-                        np.where(regular[:, i], rate.lo, fold_rate.lo),
-                        np.where(regular[:, i], rate.hi, fold_rate.hi),
+                        np.where(steady_leg[i], rate.lo, fold_rate.lo),
+                        np.where(steady_leg[i], rate.hi, fold_rate.hi),
                     )
                 up, down = rate.lo >= 0, rate.hi <= 0
                 rates.append(rate)
@@ -531,21 +702,21 @@ def _posture_flows(
                 steady = sign == s
                 if det_rate is not None:
                     steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
-                flows[row, :, c, ff] = slot_ok & steady & kept[row]
+                bits[row, :, c] |= _bit(slot_ok & steady & kept[row], ff)
     if axes_only:
-        return flows, exists, faces
+        return bits, exists, faces
     # the constraints that may be active near the leaf (within _NEAR of its size):
     # the leaves around one corner then share the direction into it
-    det = Interval(table.det_lo[rows, p], table.det_hi[rows, p])
+    det = Interval(table.det_lo[rows, post], table.det_hi[rows, post])
     with quiet():
         near_singular = (sign == 0) | _widened(det).contains(0.0)
         near = [mechanism.limits[i].pieces(_widened(angles[i])) for i in range(n_legs)]
     _adapted_flows(
-        mechanism, blo, bhi, p, angles, gradients, (pieces, near), combos,
-        usable & regular.all(axis=1), (sign, near_singular), flows, faces, n_fixed,
+        mechanism, blo, bhi, (groups, post_row, n_present), angles, gradients, (pieces, near),
+        combos, usable & regular.all(axis=1), (sign, near_singular), bits, faces, n_fixed,
         (known, margins),
-    )
-    return flows, exists, faces
+    )  # fmt: skip
+    return bits, exists, faces
 
 
 def _kept(
@@ -607,24 +778,28 @@ def _adapted_flows(
     mechanism: Mechanism,
     lo: Array,
     hi: Array,
-    p: int,
+    branches: tuple[list[_Groups], NDArray[np.intp], int],
     angles: list[Interval],
     gradients: list[list[Interval]],
     both_pieces: tuple[list[Any], list[Any]],
     combos: list[list[int]],
     usable: NDArray[np.bool_],
     signs: tuple[NDArray[np.int8], NDArray[np.bool_]],
-    flows: NDArray[np.bool_],
+    bits: NDArray[np.uint64],
     faces: NDArray[np.uint8],
     first: int,
     known_margins: tuple[Any, Any],
 ) -> None:
     """The flows along each leaf's own direction (see :func:`flow_conditions`),
-    written into ``flows`` and ``faces`` from index ``first``, one per slot and sign.
+    written into ``bits`` and ``faces`` from index ``first``, one per slot and sign.
 
     ``both_pieces`` holds the joints' pieces over the leaf and near it, ``signs``
     the sign of det A and whether it may vanish near the leaf: the direction
-    comes from the constraints near the leaf, the conditions from those in it."""
+    comes from the constraints near the leaf, the conditions from those in it.
+    ``branches`` holds the rows of each leg's branches (:func:`_branch_groups`),
+    each row's posture (an index) and the number of postures: a posture none of
+    whose rows moves along its own direction writes no exit faces."""
+    groups, post_row, n_present = branches
     pieces, near = both_pieces
     sign, near_singular = signs
     known, margins = known_margins
@@ -637,7 +812,13 @@ def _adapted_flows(
         mid = 0.5 * (lo + hi)
         centre_angles = [Interval(a.mid) for a in angles]
         joint_at = [
-            leg.joint_gradient(mid, mid, int(mechanism.postures[p][i]), centre_angles[i])  # type: ignore[attr-defined]
+            _by_branch(
+                groups[i],
+                n,
+                lambda b, at, leg=leg, i=i: leg.joint_gradient(
+                    _take(mid, at), _take(mid, at), b, _take(centre_angles[i], at)
+                ),
+            )
             for i, leg in enumerate(mechanism.legs)
         ]
         det_at = []
@@ -666,25 +847,32 @@ def _adapted_flows(
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(good, v / np.where(good, norm, 1.0), 0.0)
 
+    # the unit normals, the same for every slot
+    det_unit = {s: np.where(near_singular[:, None], unit(s * det_normal), 0.0) for s in (1, -1)}
+    joint_unit = [unit(joint_normal[i]) for i in range(n_legs)]
+    beyond_unit = {
+        s: [(rise, fall, unit(normal)) for rise, fall, normal in beyond[s]] for s in (1, -1)
+    }
     for c in range(len(combos)):
         for row, s in enumerate((1, -1)):
-            normals = [np.where(near_singular[:, None], unit(s * det_normal), 0.0)]
+            normals = [det_unit[s]]
             for i in range(n_legs):
                 _, lower, upper = near[i]
                 j = combos[c][i]
                 normals.append(
-                    np.where(lower[j][:, None], unit(joint_normal[i]), 0.0)
-                    - np.where(upper[j][:, None], unit(joint_normal[i]), 0.0)
+                    np.where(lower[j][:, None], joint_unit[i], 0.0)
+                    - np.where(upper[j][:, None], joint_unit[i], 0.0)
                 )
-            for rise, fall, normal in beyond[s]:
+            for rise, fall, normal in beyond_unit[s]:
                 normals.append(
-                    np.where(rise[:, None], unit(normal), 0.0)
-                    - np.where(fall[:, None], unit(normal), 0.0)
+                    np.where(rise[:, None], normal, 0.0) - np.where(fall[:, None], normal, 0.0)
                 )
             direction = unit(into_corner(np.stack(normals, axis=1)))
             moving = usable & (np.abs(direction).sum(axis=1) > 0)
             if not moving.any():
                 continue
+            # (the postures none of whose rows moves keep no exit faces)
+            moves = _posture_any(moving, post_row, n_present)
             velocity = [Interval(direction[:, axis]) for axis in range(k)]
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 rates = [_dot(gradients[i], velocity) for i in range(n_legs)]
@@ -695,7 +883,7 @@ def _adapted_flows(
                 ok &= (~lower[j] | (rates[i].lo >= 0)) & (~upper[j] | (rates[i].hi <= 0))
             kept = _kept(mechanism, margins, lo, hi, angles, velocity, rates)[row]
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-                # the rate decides the flow only where the rest allows it (see _posture_flows)
+                # the rate decides the flow only where the rest allows it (see _node_flows)
                 det_rate = _det_rate_where(
                     mechanism, lo, hi, angles, velocity, rates, known, ok & kept & (sign != s)
                 )
@@ -703,9 +891,9 @@ def _adapted_flows(
             if det_rate is not None:
                 steady |= (det_rate.lo >= 0) if s > 0 else (det_rate.hi <= 0)
             index = first + 2 * c + row
-            flows[row, :, c, index] = ok & steady & kept
+            bits[row, :, c] |= _bit(ok & steady & kept, index)
             columns = [direction[:, axis] for axis in range(k)]
-            faces[index] = _exit_faces(columns, columns)
+            faces[index] = np.where(moves, _exit_faces(columns, columns), np.uint8(0))
 
 
 def _constraint_normals(
