@@ -12,7 +12,6 @@ leaves either the old file or the new one, never part of one.
 from __future__ import annotations
 
 import os
-import secrets
 import shutil
 import tempfile
 from collections.abc import Iterable, Iterator
@@ -95,7 +94,7 @@ def written_whole(path: str) -> Iterator[str]:
     renamed to ``path`` when the block ends normally, removed otherwise."""
     folder = os.path.dirname(os.path.abspath(path))
     suffix = os.path.splitext(path)[1]
-    temporary = os.path.join(folder, f".moveability-{secrets.token_hex(6)}{suffix}")
+    temporary = os.path.join(folder, f".moveability-{os.urandom(6).hex()}{suffix}")
     # created as open() would: its mode follows the umask
     os.close(os.open(temporary, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
     try:
