@@ -2,20 +2,25 @@
 computed afresh: the sheet table of a tree split twice, and the search for necks
 of several possible components at once."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import moveability.analysis.result as result_module
 from moveability import analyze
 from moveability.analysis.result import (
+    RESOLVE_GROWTH,
     Analysis,
     _split,
     _split_table,
     _split_tree,
+    leaf_budget,
+    resolve_analysis,
 )
 from moveability.analysis.sheets import classify_sheets
 from moveability.hypertree.status import BOUNDARY
-from moveability.mechanisms import FiveBar
+from moveability.mechanisms import FiveBar, from_spec, load_spec
 
 
 def tables_equal(a, b):
@@ -30,7 +35,7 @@ def plain():
     # the pass at the precision of a resolved analysis, before its rounds (its
     # leaves may be split below the precision)
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(result_module, "resolve_analysis", lambda result, **_: result)
+        patch.setattr(result_module, "_resolve_rounds", lambda result, *_, **__: result)
         plain = analyze(FiveBar(7, 8, 5, 8, 5), precision=0.5)
     assert (plain.tree.levels < plain.tree.layout.n_levels).all()
     return plain
@@ -69,3 +74,32 @@ def test_refined_analysis_equals_the_fresh_one(plain):
     np.testing.assert_array_equal(carried.open_leaves(), fresh.open_leaves())
     assert carried.count == fresh.count
     assert [r.area for r in carried.regions] == [r.area for r in fresh.regions]
+
+
+def test_resolution_sheds_only_its_own_analyses():
+    # the 3-RPR at a coarse precision: a few rounds. resolve_analysis leaves the
+    # analysis it is given whole (the rounds shed only those they build), and
+    # its result is that of analyze (which lets the rounds shed its pass)
+    spec = Path(__file__).parents[2] / "examples" / "three-rpr.toml"
+    mech = from_spec(load_spec(spec))
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(result_module, "_resolve_rounds", lambda result, *_, **__: result)
+        first = analyze(mech, 3.0)
+    before = set(vars(first))
+    shed: list[int] = []
+    original = Analysis._shed
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(Analysis, "_shed", lambda self: shed.append(1) or original(self))
+        n = len(first.tree)
+        budget = min(leaf_budget(mech), n + max(int(RESOLVE_GROWTH * n), 1 << 15))
+        resolved = resolve_analysis(first, max_leaves=budget)
+        assert len(shed) >= 1  # rounds ran, and shed the analyses they built
+        again = analyze(mech, 3.0)
+    assert set(vars(first)) == before
+    assert len(resolved.tree) > len(first.tree)
+    np.testing.assert_array_equal(resolved.tree.keys, again.tree.keys)
+    assert resolved.count == again.count
+    assert [r.area for r in resolved.regions] == [r.area for r in again.regions]
+    # a shed analysis keeps what a refinement takes from it alone
+    first._shed()
+    assert set(vars(first)) <= Analysis._CARRIED

@@ -305,7 +305,8 @@ def analyze(
     )
     if extra:
         budget = len(tree) + max(int(resolve_growth * len(tree)), 1 << 15)
-        result = resolve_analysis(result, max_leaves=min(max_leaves, budget), progress=progress)
+        # the pass's analysis is no one else's: the rounds may shed it
+        result = _resolve_rounds(result, min(max_leaves, budget), progress, owned=True)
     return result
 
 
@@ -372,6 +373,16 @@ def resolve_analysis(
     ``max_leaves`` leaves. The leaves split follow the open part; each round
     still rebuilds the graphs of the whole tree.
     """
+    return _resolve_rounds(result, max_leaves, progress, owned=False)
+
+
+def _resolve_rounds(
+    result: Analysis, max_leaves: int, progress: Progress | None, *, owned: bool
+) -> Analysis:
+    """:func:`resolve_analysis`; ``owned`` says that ``result`` is no one else's: an
+    analysis that a round refines is then shed (see :meth:`Analysis._shed`) as
+    soon as the next one's table is built, which lowers the peak of memory (the
+    analyses the rounds build are always shed)."""
     mechanism = result.mechanism
     rounds = 0
     while True:
@@ -417,6 +428,8 @@ def resolve_analysis(
             splits.append((second, children))
             old_index = np.where(second >= 0, old_index[np.maximum(second, 0)], -1)
         table = _split_table(result.table, splits)
+        if owned:
+            result._shed()
         if progress is not None:
             progress(int(finer.levels.max()), n_split, len(finer))
         result = Analysis(
@@ -428,6 +441,7 @@ def resolve_analysis(
             flows_of=(result, old_index),
             joint_count=result.joint_count,
         )
+        owned = True
 
 
 def _leaf_table(
@@ -938,6 +952,23 @@ class Analysis:
             None if evidence is None else evidence.flows,
         )
         self._resolve()
+
+    #: what a refined analysis takes from the analysis it refines (see
+    #: :meth:`_shed`): its tree, pairs and flows, and the settings the rounds read
+    _CARRIED = frozenset(
+        {
+            "mechanism", "generalized_aspects", "joint_count", "precisions", "precision",
+            "tree", "_pairs", "_face_pairs", "_flows", "_complete_flows",
+        }
+    )  # fmt: skip
+
+    def _shed(self) -> None:
+        """Drop all but what a refined analysis takes from this one (``_CARRIED``),
+        once the resolution has split its tree and built the finer table: the
+        analysis is then only the source of the next one, and unusable else."""
+        for name in list(vars(self)):
+            if name not in self._CARRIED:
+                delattr(self, name)
 
     def evidence(self) -> Evidence:
         """What the analysis proved beyond its tree and sheet table (see
