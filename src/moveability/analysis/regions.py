@@ -140,7 +140,7 @@ def _sub_nodes_meet(
     tol: float,
 ) -> bool:  # pragma: no cover - compiled
     """Whether the pieces of sub-node (i, p, ci) and (j, q, cj) overlap on every leg
-    (``bounds``: (n, P, legs, 2, 2): each leg's two pieces; ``piece_of`` (slots,
+    (``bounds``: (n, P, legs, pieces, 2): each leg's pieces; ``piece_of`` (slots,
     legs): the piece of each leg in a slot)."""
     for leg in range(bounds.shape[2]):
         a, b = piece_of[ci, leg], piece_of[cj, leg]
@@ -205,8 +205,8 @@ def _possible_labels_both(
     on folding legs. Labels on the ``taken`` sub-nodes, numbered by first
     sub-node (as :func:`~moveability.hypertree.topology.edge_components`).
     ``alive`` (2, n, P) and ``taken`` (2, sub-nodes) per sign; the sub-nodes that exist,
-    ``has`` (n, P, slots), and their pieces' bounds, ``bounds`` (n, P, legs, 2,
-    2: each leg's two pieces, node by node), with ``piece_of`` (slots, legs) the
+    ``has`` (n, P, slots), and their pieces' bounds, ``bounds`` (n, P, legs,
+    pieces, 2: each leg's pieces, node by node), with ``piece_of`` (slots, legs) the
     piece of each leg in a slot; whether two pieces overlap is found once for
     both signs.
     Returns the labels (2, sub-nodes) and their counts (2,); each sign's
@@ -303,10 +303,12 @@ def _stroke_bounds(
     """The pieces of the prismatic joints (legs ``strokes``, strokes ``[stop_lo,
     stop_hi]``) of the (n, P, legs) enclosures, as :func:`joint_pieces` gives
     them (a NaN bound stays NaN, as in ``np.maximum``): piece 0 into ``bounds``
-    (n, P, legs, 2, 2; a stroke has one piece, the other is never read), the
-    slots where it is missing cleared in ``has`` (n, P, slots). One pass."""
+    (n, P, legs, pieces, 2; a stroke has one piece, the other, where there are
+    two, is never read), the slots where it is missing cleared in ``has`` (n, P,
+    slots). One pass."""
     n, n_post, n_legs = bounds.shape[0], bounds.shape[1], bounds.shape[2]
     slots = has.shape[2]
+    two = bounds.shape[3] > 1
     for i in range(n):
         for p in range(n_post):
             for leg in range(n_legs):
@@ -317,8 +319,9 @@ def _stroke_bounds(
                 ok = a <= stop_hi[leg] + _TOL and b >= stop_lo[leg] - _TOL
                 bounds[i, p, leg, 0, 0] = stop_lo[leg] if a < stop_lo[leg] else a
                 bounds[i, p, leg, 0, 1] = stop_hi[leg] if b > stop_hi[leg] else b
-                bounds[i, p, leg, 1, 0] = stop_lo[leg]
-                bounds[i, p, leg, 1, 1] = stop_lo[leg]
+                if two:
+                    bounds[i, p, leg, 1, 0] = stop_lo[leg]
+                    bounds[i, p, leg, 1, 1] = stop_lo[leg]
                 if not ok:
                     for c in range(slots):
                         has[i, p, c] = False
@@ -330,18 +333,19 @@ def _sub_node_bounds(
     limits: tuple[JointLimit, ...],
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.bool_]]:
     """The pieces of the sub-nodes of the (n, P, legs) enclosures, node by node:
-    ``bounds`` (n, P, legs, 2, 2), each leg's two pieces (:func:`joint_pieces`),
-    ``piece_of`` (slots, legs), the piece of each leg in a slot (see
-    :func:`split_legs`), and ``has`` (n, P, slots), the sub-nodes whose every
-    leg's piece exists. Prismatic joints in one compiled pass, the others from
-    :func:`joint_pieces`."""
+    ``bounds`` (n, P, legs, pieces, 2), each leg's pieces (:func:`joint_pieces`:
+    two where a leg's range has two pieces, see :func:`split_legs`, else the
+    first alone, as no slot reads another), ``piece_of`` (slots, legs), the
+    piece of each leg in a slot, and ``has`` (n, P, slots), the sub-nodes whose
+    every leg's piece exists. Prismatic joints in one compiled pass, the others
+    from :func:`joint_pieces`."""
     n, n_post, n_legs = angles_lo.shape
     split = split_legs(limits)
     slots = 1 << len(split)
     piece_of = np.zeros((slots, n_legs), dtype=np.int64)
     for i in split:
         piece_of[:, i] = (np.arange(slots) >> split.index(i)) & 1
-    bounds = np.empty((n, n_post, n_legs, 2, 2))
+    bounds = np.empty((n, n_post, n_legs, 2 if split else 1, 2))
     has = np.ones((n, n_post, slots), dtype=bool)
     strokes = np.array([lim.prismatic and not lim.periodic for lim in limits], dtype=bool)
     if strokes.any():
@@ -356,7 +360,7 @@ def _sub_node_bounds(
         )
     for i in np.flatnonzero(~strokes).tolist():
         lo, hi, ok = joint_pieces(angles_lo[:, :, i], angles_hi[:, :, i], limits[i])
-        for k in range(2):
+        for k in range(bounds.shape[3]):
             bounds[:, :, i, k, 0] = lo[k]
             bounds[:, :, i, k, 1] = hi[k]
         for c in range(slots):
@@ -431,7 +435,7 @@ def region_graph(
     # and, one turn on, near lo): a path never passes from one to the other. Each
     # node is split by the piece of [lo, hi] each leg's value lies in, and pieces
     # are joined only where they overlap.
-    # per node, each leg's two pieces (once, whatever the slots), and the sub-nodes
+    # per node, each leg's pieces (once, whatever the slots), and the sub-nodes
     bounds, piece_of, has = _sub_node_bounds(table.angles_lo, table.angles_hi, limits)
     slots = has.shape[2]
     # both signs from one pass over the pairs
