@@ -382,6 +382,32 @@ def test_sub_node_bounds_are_the_joint_pieces():
     assert has.any() and not has.all()
 
 
+def test_sub_node_bounds_keep_one_piece_where_no_range_has_two():
+    """Without a limited revolute joint, no slot reads a second piece: each leg's
+    first alone is kept, the same as where a leg has two pieces."""
+    from moveability.analysis.regions import _sub_node_bounds, joint_pieces
+
+    rng = np.random.default_rng(9)
+    lo = rng.uniform(-4, 16, (100, 1, 3))
+    hi = lo + rng.uniform(0, 8, lo.shape)
+    ends = [(4.0, 14.0), (5.0, 12.0), (0.0, 9.0)]
+    strokes = tuple(JointLimit(lo=a, hi=b, periodic=False, prismatic=True) for a, b in ends)
+    bounds, piece_of, has = _sub_node_bounds(lo, hi, strokes)
+    assert bounds.shape == (100, 1, 3, 1, 2) and not piece_of.any()
+    # with a limited revolute leg beside them: two pieces, the strokes' first the same
+    revolute = JointLimit(lo=-1.0, hi=2.5, periodic=False, prismatic=False)
+    wide_lo = np.concatenate([lo, lo[:, :, :1]], axis=2)
+    wide_hi = np.concatenate([hi, hi[:, :, :1]], axis=2)
+    two, _, _ = _sub_node_bounds(wide_lo, wide_hi, (*strokes, revolute))
+    assert two.shape == (100, 1, 4, 2, 2)
+    np.testing.assert_array_equal(bounds[:, :, :, 0], two[:, :, :3, 0])
+    want = np.ones(has.shape[:2], dtype=bool)
+    for i, limit in enumerate(strokes):
+        want &= joint_pieces(lo[:, :, i], hi[:, :, i], limit)[2][0]
+    np.testing.assert_array_equal(has[:, :, 0], want)
+    assert has.any() and not has.all()
+
+
 @pytest.mark.parametrize("seed", range(3))
 def test_possible_labels_of_both_signs_are_those_found_apart(seed):
     """The possible graph's components of both signs from one pass over the pairs

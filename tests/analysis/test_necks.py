@@ -6,7 +6,7 @@ import pytest
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import shortest_path
 
-from moveability.analysis.result import _chain_search, _necks
+from moveability.analysis.result import _chain_search, _grown, _necks, _NeckSearches
 
 
 def random_case(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -29,7 +29,8 @@ def test_chain_search_against_scipy_distances(seed):
     n = gap.size
     through = gap | (source >= 0)
     seeds = np.flatnonzero(source >= 0)
-    hops, pred, label, a, b, searched = _chain_search(pairs, through, seeds, source)
+    group = np.where(through, 0, -1).astype(np.int64)
+    hops, pred, label, a, b = _chain_search(pairs, group, seeds, source)
 
     # reference: distances from a node joined to every seed, along the pairs of
     # two leaves that are `through`
@@ -37,8 +38,6 @@ def test_chain_search_against_scipy_distances(seed):
     rows = np.concatenate([pairs[use, 0], np.full(seeds.size, n)])
     cols = np.concatenate([pairs[use, 1], seeds])
     graph = coo_matrix((np.ones(rows.size), (rows, cols)), shape=(n + 1, n + 1)).tocsr()
-    # the pairs searched, returned for the growth of the necks: those `through`
-    np.testing.assert_array_equal(searched, pairs[use])
     dist = shortest_path(graph, directed=False, unweighted=True, indices=n)[:n] - 1.0
     np.testing.assert_array_equal(hops, dist)
 
@@ -77,8 +76,8 @@ def test_necks_hold_a_shortest_chain_between_each_two_parts(seed):
     out = _necks(pairs, gap, source, 1)
     assert not (out & ~gap).any()
     through = gap | (source >= 0)
-    hops, pred, label, a, b, _ = _chain_search(
-        pairs, through, np.flatnonzero(source >= 0), source
+    hops, pred, label, a, b = _chain_search(
+        pairs, np.where(through, 0, -1).astype(np.int64), np.flatnonzero(source >= 0), source
     )
     if not a.size:
         assert not out.any()
@@ -95,3 +94,58 @@ def test_necks_hold_a_shortest_chain_between_each_two_parts(seed):
             while w >= 0:
                 assert out[w] or not gap[w]
                 w = int(pred[w])
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_necks_by_groups_are_the_union_of_each_groups_necks(seed):
+    # a graph's leaves dealt to a few searches, each with its own gap leaves and
+    # parts: one search by groups gives the union of the searches run alone
+    pairs, gap, source = random_case(seed)
+    rng = np.random.default_rng(1000 + seed)
+    n = gap.size
+    which = rng.integers(-1, 3, n)  # the search of each leaf (-1: none)
+    searches = _NeckSearches(n)
+    expected = np.zeros(n, dtype=bool)
+    for g in range(3):
+        mine = which == g
+        g_gap = gap & mine
+        g_source = np.where(mine, source, -1).astype(np.int64)
+        expected |= _necks(pairs, g_gap, g_source, 1)
+        searches.add(g_gap, g_source, 4)
+    assert len(searches.batches) == 1  # apart: one batch
+    got = np.zeros(n, dtype=bool)
+    for b_gap, b_source, b_group in searches.batches:
+        got |= _necks(pairs, b_gap, b_source, 1, b_group)
+    np.testing.assert_array_equal(got, expected)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_neck_searches_that_share_leaves_run_apart(seed):
+    pairs, gap, source = random_case(seed)
+    n = gap.size
+    searches = _NeckSearches(n)
+    expected = np.zeros(n, dtype=bool)
+    # the same leaves twice, then a third of the leaves: three batches, two
+    for g_gap in (gap, gap, gap & (np.arange(n) % 3 == 0)):
+        expected |= _necks(pairs, g_gap, source, 1)
+        searches.add(g_gap, source, 4)
+    assert len(searches.batches) == 3
+    got = np.zeros(n, dtype=bool)
+    for b_gap, b_source, b_group in searches.batches:
+        got |= _necks(pairs, b_gap, b_source, 1, b_group)
+    np.testing.assert_array_equal(got, expected)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_grown_along_the_pairs_of_one_group(seed):
+    pairs, gap, _ = random_case(seed)
+    rng = np.random.default_rng(2000 + seed)
+    n = gap.size
+    group = rng.integers(-1, 2, n).astype(np.int64)
+    out = rng.random(n) < 0.2
+    expected = out.copy()
+    for i, j in pairs:
+        if group[i] >= 0 and group[i] == group[j]:
+            expected[i] |= out[j]
+            expected[j] |= out[i]
+    np.testing.assert_array_equal(_grown(out, pairs, group), expected)

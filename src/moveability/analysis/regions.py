@@ -140,7 +140,7 @@ def _sub_nodes_meet(
     tol: float,
 ) -> bool:  # pragma: no cover - compiled
     """Whether the pieces of sub-node (i, p, ci) and (j, q, cj) overlap on every leg
-    (``bounds``: (n, P, legs, 2, 2): each leg's two pieces; ``piece_of`` (slots,
+    (``bounds``: (n, P, legs, pieces, 2): each leg's pieces; ``piece_of`` (slots,
     legs): the piece of each leg in a slot)."""
     for leg in range(bounds.shape[2]):
         a, b = piece_of[ci, leg], piece_of[cj, leg]
@@ -245,8 +245,8 @@ def _possible_labels_both(
     on folding legs. Labels on the ``taken`` sub-nodes, numbered by first
     sub-node (as :func:`~moveability.hypertree.topology.edge_components`).
     ``alive`` (2, n, P) and ``taken`` (2, sub-nodes) per sign; the sub-nodes that exist,
-    ``has`` (n, P, slots), and their pieces' bounds, ``bounds`` (n, P, legs, 2,
-    2: each leg's two pieces, node by node), with ``piece_of`` (slots, legs) the
+    ``has`` (n, P, slots), and their pieces' bounds, ``bounds`` (n, P, legs,
+    pieces, 2: each leg's pieces, node by node), with ``piece_of`` (slots, legs) the
     piece of each leg in a slot; whether two pieces overlap is found once for
     both signs.
 
@@ -363,13 +363,16 @@ def _piece_bounds(
     """Each leg's two pieces of the (n, P, legs) enclosures, as :func:`joint_pieces`
     gives them for a free joint, a stroke or a limited revolute joint (``kinds``:
     ``_FREE``, ``_STROKE``, ``_REVOLUTE``; stops ``[stop_lo, stop_hi]``), into
-    ``bounds`` (n, P, legs, 2, 2; a stroke's second piece is never read); the
-    sub-nodes whose piece of some leg is missing (``piece_of`` (slots, legs): the
-    piece of each leg in a slot) cleared in ``has`` (n, P, slots). One pass, the
-    same floats as joint_pieces' numpy operations (a NaN bound stays NaN, as in
+    ``bounds`` (n, P, legs, pieces, 2: two pieces where some leg is a limited
+    revolute joint, else the first alone; a free joint's or a stroke's second
+    piece, where there is one, is never read); the sub-nodes whose piece of
+    some leg is missing (``piece_of`` (slots, legs): the piece of each leg in a
+    slot) cleared in ``has`` (n, P, slots). One pass, the same floats as
+    joint_pieces' numpy operations (a NaN bound stays NaN, as in
     ``np.maximum``, and fails every comparison)."""
     n, n_post, n_legs = bounds.shape[0], bounds.shape[1], bounds.shape[2]
     slots = has.shape[2]
+    pieces = bounds.shape[3]
     two_pi = 2 * np.pi
     for i in range(n):
         for p in range(n_post):
@@ -378,7 +381,7 @@ def _piece_bounds(
                 b = hi[i, p, leg]
                 s_lo, s_hi = stop_lo[leg], stop_hi[leg]
                 if kinds[leg] == _FREE:
-                    for k in range(2):
+                    for k in range(pieces):
                         bounds[i, p, leg, k, 0] = -np.inf
                         bounds[i, p, leg, k, 1] = np.inf
                     continue
@@ -386,8 +389,9 @@ def _piece_bounds(
                     ok = a <= s_hi + _TOL and b >= s_lo - _TOL
                     bounds[i, p, leg, 0, 0] = s_lo if a < s_lo else a
                     bounds[i, p, leg, 0, 1] = s_hi if b > s_hi else b
-                    bounds[i, p, leg, 1, 0] = s_lo
-                    bounds[i, p, leg, 1, 1] = s_lo
+                    if pieces > 1:
+                        bounds[i, p, leg, 1, 0] = s_lo
+                        bounds[i, p, leg, 1, 1] = s_lo
                     if not ok:
                         for c in range(slots):
                             has[i, p, c] = False
@@ -420,17 +424,18 @@ def _sub_node_bounds(
     limits: tuple[JointLimit, ...],
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.bool_]]:
     """The pieces of the sub-nodes of the (n, P, legs) enclosures, node by node:
-    ``bounds`` (n, P, legs, 2, 2), each leg's two pieces (:func:`joint_pieces`),
-    ``piece_of`` (slots, legs), the piece of each leg in a slot (see
-    :func:`split_legs`), and ``has`` (n, P, slots), the sub-nodes whose every
-    leg's piece exists. One compiled pass (:func:`_piece_bounds`)."""
+    ``bounds`` (n, P, legs, pieces, 2), each leg's pieces (:func:`joint_pieces`:
+    two where a leg's range has two pieces, see :func:`split_legs`, else the
+    first alone, as no slot reads another), ``piece_of`` (slots, legs), the
+    piece of each leg in a slot, and ``has`` (n, P, slots), the sub-nodes whose
+    every leg's piece exists. One compiled pass (:func:`_piece_bounds`)."""
     n, n_post, n_legs = angles_lo.shape
     split = split_legs(limits)
     slots = 1 << len(split)
     piece_of = np.zeros((slots, n_legs), dtype=np.int64)
     for i in split:
         piece_of[:, i] = (np.arange(slots) >> split.index(i)) & 1
-    bounds = np.empty((n, n_post, n_legs, 2, 2))
+    bounds = np.empty((n, n_post, n_legs, 2 if split else 1, 2))
     has = np.ones((n, n_post, slots), dtype=bool)
     kinds = np.array(
         [_FREE if lim.periodic else _STROKE if lim.prismatic else _REVOLUTE for lim in limits],
@@ -520,7 +525,7 @@ def region_graph(
     # and, one turn on, near lo): a path never passes from one to the other. Each
     # node is split by the piece of [lo, hi] each leg's value lies in, and pieces
     # are joined only where they overlap.
-    # per node, each leg's two pieces (once, whatever the slots), and the sub-nodes
+    # per node, each leg's pieces (once, whatever the slots), and the sub-nodes
     bounds, piece_of, has = _sub_node_bounds(table.angles_lo, table.angles_hi, limits)
     slots = has.shape[2]
     # both signs from one pass over the pairs

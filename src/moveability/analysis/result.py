@@ -32,7 +32,6 @@ from ..types import NO, UNKNOWN, YES, answer, word
 from .flows import (
     Attachment,
     dead_or_certified,
-    doubled,
     face_neighbours,
     flow_conditions,
     slot_spans,
@@ -306,7 +305,8 @@ def analyze(
     )
     if extra:
         budget = len(tree) + max(int(resolve_growth * len(tree)), 1 << 15)
-        result = resolve_analysis(result, max_leaves=min(max_leaves, budget), progress=progress)
+        # the pass's analysis is no one else's: the rounds may shed it
+        result = _resolve_rounds(result, min(max_leaves, budget), progress, owned=True)
     return result
 
 
@@ -373,6 +373,16 @@ def resolve_analysis(
     ``max_leaves`` leaves. The leaves split follow the open part; each round
     still rebuilds the graphs of the whole tree.
     """
+    return _resolve_rounds(result, max_leaves, progress, owned=False)
+
+
+def _resolve_rounds(
+    result: Analysis, max_leaves: int, progress: Progress | None, *, owned: bool
+) -> Analysis:
+    """:func:`resolve_analysis`; ``owned`` says that ``result`` is no one else's: an
+    analysis that a round refines is then shed (see :meth:`Analysis._shed`) as
+    soon as the next one's table is built, which lowers the peak of memory (the
+    analyses the rounds build are always shed)."""
     mechanism = result.mechanism
     rounds = 0
     while True:
@@ -400,7 +410,8 @@ def resolve_analysis(
             return result
         rounds += 1
         phase(progress, "resolving", round=rounds, levels=int(tree.layout.n_levels))
-        finer, table, old_index = _split(mechanism, tree, result.table, mask)
+        finer, children, old_index = _split_tree(mechanism, tree, mask)
+        splits = [(old_index, children)]
         # a leaf where a region may hide is split twice: such leaves tend to stay
         # open for several levels, and each round costs the whole tree
         # a child's parent is the leaf of the coarser tree whose key range holds its key
@@ -411,8 +422,14 @@ def resolve_analysis(
         again &= finer.levels < finer.layout.n_levels
         room = (max_leaves - len(finer)) // ((1 << tree.ndim) - 1)
         if 0 < int(again.sum()) <= room:
-            finer, table, second = _split(mechanism, finer, table, again)
+            # the table of the finer tree once, from the coarser one's and both
+            # splits' children
+            finer, children, second = _split_tree(mechanism, finer, again)
+            splits.append((second, children))
             old_index = np.where(second >= 0, old_index[np.maximum(second, 0)], -1)
+        table = _split_table(result.table, splits)
+        if owned:
+            result._shed()
         if progress is not None:
             progress(int(finer.levels.max()), n_split, len(finer))
         result = Analysis(
@@ -424,6 +441,7 @@ def resolve_analysis(
             flows_of=(result, old_index),
             joint_count=result.joint_count,
         )
+        owned = True
 
 
 def _leaf_table(
@@ -523,6 +541,16 @@ def _split(
     """Split the leaves of ``mask`` once: the finer tree, its sheet table (kept
     leaves keep their rows, children are classified) and each leaf's index in
     ``tree`` (-1 for children)."""
+    finer, children, old_index = _split_tree(mechanism, tree, mask)
+    return finer, _split_table(table, [(old_index, children)]), old_index
+
+
+def _split_tree(
+    mechanism: Mechanism, tree: HyperTree, mask: NDArray[np.bool_]
+) -> tuple[HyperTree, SheetTable | None, NDArray[np.intp]]:
+    """:func:`_split` without the finer tree's table: the finer tree, the sheet
+    table of its children (in their order among its leaves) and each leaf's
+    index in ``tree`` (-1 for children)."""
     children: list[SheetTable] = []
 
     def classify(
@@ -531,6 +559,8 @@ def _split(
         found.append(classify_sheets(mechanism, lo, hi))
         return found[-1].statuses()
 
+    # leaves at the maximal level stay as they are
+    mask = mask & (tree.levels < tree.layout.n_levels)
     finer = tree.refine(mask, classify)
     # kept leaves stay in order among the new ones; children come in key order (a
     # child's key lies in its parent's range, apart from every kept leaf's)
@@ -543,13 +573,40 @@ def _split(
         is_child = np.ones(len(finer), dtype=bool)
     old_index = np.full(len(finer), -1, dtype=np.intp)
     old_index[~is_child] = np.flatnonzero(~mask)
+    # no children when no leaf could be split (all at the maximal level)
+    return finer, (children[0] if children else None), old_index
+
+
+def _split_table(
+    table: SheetTable, splits: list[tuple[NDArray[np.intp], SheetTable | None]]
+) -> SheetTable:
+    """The sheet table of a tree split in turn by each of ``splits`` (each leaf's
+    index in the tree before that split, -1 for a child, and the children's
+    table, as :func:`_split_tree` gives them) from ``table``, the table of the
+    first tree: the rows of the leaves kept from it and of the children of each
+    split, gathered once."""
+    # per leaf of the last tree: its row in `table` (-1 for a child), and, for a
+    # child, its split and its row in that split's children
+    row = np.arange(len(table.status), dtype=np.intp)
+    split = np.full(row.size, -1, dtype=np.intp)
+    child_row = np.full(row.size, -1, dtype=np.intp)
+    for s, (old_index, _) in enumerate(splits):
+        child = old_index < 0
+        at = np.maximum(old_index, 0)
+        rank = np.cumsum(child) - 1
+        row = np.where(child, -1, row[at])
+        split = np.where(child, s, split[at])
+        child_row = np.where(child, rank, child_row[at])
     # one gather from the old rows (any row in the children's places), then the
     # children's rows written over theirs: no copy of the old table stacked
-    out = table.take(np.maximum(old_index, 0))
-    at = np.flatnonzero(is_child)
-    for f in fields(SheetTable):
-        getattr(out, f.name)[at] = getattr(children[0], f.name)
-    return finer, out, old_index
+    out = table.take(np.maximum(row, 0))
+    for s, (_, children) in enumerate(splits):
+        at = np.flatnonzero(split == s)
+        if children is None or not at.size:
+            continue
+        for f in fields(SheetTable):
+            getattr(out, f.name)[at] = getattr(children, f.name)[child_row[at]]
+    return out
 
 
 def _reachable_contact(
@@ -600,7 +657,7 @@ def _walk_back(
 @kernel
 def _chain_search(
     pairs: NDArray[np.intp],
-    through: NDArray[np.bool_],
+    group: NDArray[np.int64],
     seeds: NDArray[np.intp],
     source: NDArray[np.int64],
 ) -> tuple[
@@ -609,10 +666,11 @@ def _chain_search(
     NDArray[np.int64],
     NDArray[np.int64],
     NDArray[np.int64],
-    NDArray[np.int64],
 ]:  # pragma: no cover - compiled
     """The breadth-first search of :func:`_necks`, from every seed at once, along
-    the pairs whose two leaves are ``through``.
+    the pairs whose two leaves are in one search group (``group``: -1 for a leaf
+    searched by none; the leaves of a group are *through*). Groups are searched
+    apart: no chain passes from one to another.
 
     Returns each leaf's hops from the nearest seed (inf where none reaches it),
     its predecessor on a shortest chain (-1 for a seed or an unreached leaf),
@@ -622,21 +680,16 @@ def _chain_search(
     then the others, each in the order of ``pairs``). A leaf's chain goes on
     through its neighbour one step nearer with the largest index, whose label
     it takes. Every seed is reached at once (0 hops, its own part): a pair of
-    two seeds is no step of a chain, and is left out of the search. Last, the
-    pairs whose two leaves are ``through``, (m, 2) in the order of ``pairs``."""
-    n = through.size
+    two seeds is no step of a chain, and is left out of the search."""
+    n = group.size
     degree = np.zeros(n + 1, dtype=np.int64)
-    # one pass over the pairs: those of two leaves `through`, in order (grown by
-    # doubling), and each leaf's count of them
-    cap = max(1024, n)
-    got_a = np.empty(cap, dtype=np.int64)
-    got_b = np.empty(cap, dtype=np.int64)
-    n_got = 0
+    # two passes over the pairs of two leaves of one group (a test of each pair
+    # costs less than keeping them): each leaf's count of them, then the lists
     m = 0
     n_seed_meets = 0
     for t in range(pairs.shape[0]):
         i, j = pairs[t, 0], pairs[t, 1]
-        if not (through[i] and through[j]):
+        if group[i] < 0 or group[i] != group[j]:
             continue
         if source[i] >= 0 and source[j] >= 0:
             if source[i] != source[j]:
@@ -645,13 +698,6 @@ def _chain_search(
             degree[i + 1] += 1
             degree[j + 1] += 1
             m += 1
-        if n_got == cap:
-            cap *= 2
-            got_a = doubled(got_a, n_got)
-            got_b = doubled(got_b, n_got)
-        got_a[n_got] = i
-        got_b[n_got] = j
-        n_got += 1
     for i in range(n):
         degree[i + 1] += degree[i]
     fill = degree[:-1].copy()
@@ -662,8 +708,10 @@ def _chain_search(
     b = np.empty(n_seed_meets + m, dtype=np.int64)
     s = 0
     k = n_seed_meets
-    for t in range(n_got):
-        i, j = got_a[t], got_b[t]
+    for t in range(pairs.shape[0]):
+        i, j = pairs[t, 0], pairs[t, 1]
+        if group[i] < 0 or group[i] != group[j]:
+            continue
         if source[i] >= 0 and source[j] >= 0:
             if source[i] != source[j]:
                 a[s], b[s] = i, j
@@ -715,21 +763,20 @@ def _chain_search(
         if la >= 0 and lb >= 0 and la != lb:
             a[k], b[k] = a[t], b[t]
             k += 1
-    searched = np.empty((n_got, 2), dtype=np.int64)
-    for t in range(n_got):
-        searched[t, 0] = got_a[t]
-        searched[t, 1] = got_b[t]
-    return hops, pred, label, a[:k], b[:k], searched
+    return hops, pred, label, a[:k], b[:k]
 
 
 @kernel
 def _grown(
-    out: NDArray[np.bool_], pairs: NDArray[np.intp]
+    out: NDArray[np.bool_], pairs: NDArray[np.intp], group: NDArray[np.int64]
 ) -> NDArray[np.bool_]:  # pragma: no cover - compiled
-    """``out`` and the leaves touching it (by ``pairs``)."""
+    """``out`` and the leaves touching it (by ``pairs``) in its group (``group``,
+    -1 for a leaf of none: see :func:`_chain_search`)."""
     grown = out.copy()
     for t in range(pairs.shape[0]):
         i, j = pairs[t, 0], pairs[t, 1]
+        if group[i] < 0 or group[i] != group[j]:
+            continue
         if out[i]:
             grown[j] = True
         if out[j]:
@@ -738,7 +785,11 @@ def _grown(
 
 
 def _necks(
-    pairs: NDArray[np.intp], gap: NDArray[np.bool_], source: NDArray[np.int64], slack: int
+    pairs: NDArray[np.intp],
+    gap: NDArray[np.bool_],
+    source: NDArray[np.int64],
+    slack: int,
+    group: NDArray[np.int64] | None = None,
 ) -> NDArray[np.bool_]:
     """Gap leaves on the shortest chains of touching leaves between parts.
 
@@ -747,16 +798,25 @@ def _necks(
     each leaf with its nearest part; where leaves of two labels touch, a chain
     joins the two parts through them. For each pair of parts the chains within
     ``slack`` leaves of the shortest are kept, and their gap leaves returned.
+
+    ``group``, when given, splits the search into independent ones: each leaf of
+    ``gap`` or with a part is in one group (-1 for the others), the parts of two
+    groups are distinct, and chains only pass between the leaves of one group.
+    The result is the union of the searches of each group alone, each with the
+    gap leaves and parts of its group (one pass over the pairs for them all).
     """
     n = gap.size
     out = np.zeros(n, dtype=bool)
     seeds = np.flatnonzero(source >= 0)
-    through = gap | (source >= 0)
+    if group is None:
+        group = np.where(gap | (source >= 0), 0, -1).astype(np.int64)
     # each leaf labelled with its nearest part, along a shortest chain; the
     # touching leaves of two labels
-    hops, pred, label, a, b, searched = _chain_search(
-        np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2),
-        through,
+    pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+    group = np.ascontiguousarray(group, dtype=np.int64)
+    hops, pred, label, a, b = _chain_search(
+        pairs,
+        group,
         seeds,
         np.ascontiguousarray(source, dtype=np.int64),
     )
@@ -764,16 +824,57 @@ def _necks(
         return out
     length = hops[a] + hops[b]
     low, high = np.minimum(label[a], label[b]), np.maximum(label[a], label[b])
-    pair_key = low * (int(label.max()) + 1) + high
+    # per two parts that chains join, the shortest chain's length
+    _, pair_key = np.unique(low * (int(label.max()) + 1) + high, return_inverse=True)
+    pair_key = pair_key.reshape(-1)
     shortest = np.full(int(pair_key.max()) + 1, np.inf)
     np.minimum.at(shortest, pair_key, length)
     near = length <= shortest[pair_key] + slack
     # walk back from both ends of each kept contact to its parts
     _walk_back(out, np.concatenate([a[near], b[near]]), source, pred)
     # and the gap leaves touching the chains (parts that touch have chains of
-    # their own leaves alone): along the pairs searched alone, as the chains and
-    # the gap leaves are all `through`
-    return _grown(out, searched) & gap
+    # their own leaves alone): along the pairs searched alone (two leaves of one
+    # group), as the chains and the gap leaves are all in their group
+    return _grown(out, pairs, group) & gap
+
+
+class _NeckSearches:
+    """Searches of :func:`_necks` (each a gap mask and its parts over ``n`` leaves)
+    gathered in batches of searches whose leaves (gap or part) are apart: each
+    batch is one search by groups, whose result is the union of its searches'.
+    A search joins the first batch none of whose leaves it holds."""
+
+    def __init__(self, n: int) -> None:
+        self._n = n
+        #: per batch: its leaves, then (gap, source, group) and its parts' count
+        self._taken: list[NDArray[np.bool_]] = []
+        self.batches: list[tuple[NDArray[np.bool_], NDArray[np.int64], NDArray[np.int64]]] = []
+        self._parts: list[int] = []
+
+    def add(self, gap: NDArray[np.bool_], source: NDArray[np.int64], n_parts: int) -> None:
+        """One search: its gap leaves and the part (0 to ``n_parts - 1``) of each
+        leaf holding one, -1 elsewhere."""
+        through = gap | (source >= 0)
+        b = next((b for b, t in enumerate(self._taken) if not (t & through).any()), None)
+        if b is None:
+            b = len(self.batches)
+            self._taken.append(np.zeros(self._n, dtype=bool))
+            self.batches.append(
+                (
+                    np.zeros(self._n, dtype=bool),
+                    np.full(self._n, -1, dtype=np.int64),
+                    np.full(self._n, -1, dtype=np.int64),
+                )
+            )
+            self._parts.append(0)
+        b_gap, b_source, b_group = self.batches[b]
+        self._taken[b] |= through
+        b_gap |= gap
+        held = source >= 0
+        # the parts of each search numbered apart
+        b_source[held] = source[held] + self._parts[b]
+        self._parts[b] += n_parts
+        b_group[through] = int(b_group.max(initial=-1)) + 1
 
 
 def count_text(at_least: int, at_most: int | None, noun: str = "region") -> str:
@@ -851,6 +952,23 @@ class Analysis:
             None if evidence is None else evidence.flows,
         )
         self._resolve()
+
+    #: what a refined analysis takes from the analysis it refines (see
+    #: :meth:`_shed`): its tree, pairs and flows, and the settings the rounds read
+    _CARRIED = frozenset(
+        {
+            "mechanism", "generalized_aspects", "joint_count", "precisions", "precision",
+            "tree", "_pairs", "_face_pairs", "_flows", "_complete_flows",
+        }
+    )  # fmt: skip
+
+    def _shed(self) -> None:
+        """Drop all but what a refined analysis takes from this one (``_CARRIED``),
+        once the resolution has split its tree and built the finer table: the
+        analysis is then only the source of the next one, and unusable else."""
+        for name in list(vars(self)):
+            if name not in self._CARRIED:
+                delattr(self, name)
 
     def evidence(self) -> Evidence:
         """What the analysis proved beyond its tree and sheet table (see
@@ -1023,6 +1141,9 @@ class Analysis:
         n, n_post = t.status.shape
         certified = (t.status == IN) | t.group
         sizes = np.bincount(g.certain[g.certain >= 0], minlength=g.certain_sign.size)
+        # the searches of every possible component of several parts, those whose
+        # leaves are apart run together (see _necks' groups)
+        searches = _NeckSearches(n)
         for row in (0, 1):
             sign = (1, -1)[row]
             of_sign = np.flatnonzero(g.certain_sign == sign)
@@ -1041,7 +1162,9 @@ class Analysis:
                 rank[parts[order]] = np.arange(parts.size)
                 last = rank[g.certain].max(axis=1)
                 source = np.where(last >= 0, order[np.maximum(last, 0)], -1).astype(np.int64)
-                mask |= _necks(self._pairs, gap, source, slack)
+                searches.add(gap, source, parts.size)
+        for gap, source, group in searches.batches:
+            mask |= _necks(self._pairs, gap, source, slack, group)
         return mask
 
     def hiding_leaves(self) -> NDArray[np.bool_]:

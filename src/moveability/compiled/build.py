@@ -173,9 +173,9 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         (array(B1, out=True), array(I8), array(I8), array(I8))
     ],
     "moveability.analysis.result._chain_search": [
-        (array(I8, 2), array(B1), array(I8), array(I8))
+        (array(I8, 2), array(I8), array(I8), array(I8))
     ],
-    "moveability.analysis.result._grown": [(array(B1), array(I8, 2))],
+    "moveability.analysis.result._grown": [(array(B1), array(I8, 2), array(I8))],
     "moveability.mechanisms.tape._isolate_level": [
         (
             array(I8, 2), R1, R1, I8, I8, array(I8, 2), array(I8), array(I8, 2), array(I8), R2,
