@@ -96,6 +96,14 @@ def test_necks_hold_a_shortest_chain_between_each_two_parts(seed):
                 w = int(pred[w])
 
 
+
+def batched(searches: _NeckSearches, pairs: np.ndarray, n: int) -> np.ndarray:
+    """The necks of every batch of ``searches``, one search a batch, joined."""
+    got = np.zeros(n, dtype=bool)
+    for b_gap, b_source, b_group in searches.batches:
+        got |= _necks(pairs, b_gap, b_source, 1, b_group)
+    return got
+
 @pytest.mark.parametrize("seed", range(30))
 def test_necks_by_groups_are_the_union_of_each_groups_necks(seed):
     # a graph's leaves dealt to a few searches, each with its own gap leaves and
@@ -113,10 +121,7 @@ def test_necks_by_groups_are_the_union_of_each_groups_necks(seed):
         expected |= _necks(pairs, g_gap, g_source, 1)
         searches.add(g_gap, g_source, 4)
     assert len(searches.batches) == 1  # apart: one batch
-    got = np.zeros(n, dtype=bool)
-    for b_gap, b_source, b_group in searches.batches:
-        got |= _necks(pairs, b_gap, b_source, 1, b_group)
-    np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(batched(searches, pairs, n), expected)
 
 
 @pytest.mark.parametrize("seed", range(10))
@@ -130,10 +135,7 @@ def test_neck_searches_that_share_leaves_run_apart(seed):
         expected |= _necks(pairs, g_gap, source, 1)
         searches.add(g_gap, source, 4)
     assert len(searches.batches) == 3
-    got = np.zeros(n, dtype=bool)
-    for b_gap, b_source, b_group in searches.batches:
-        got |= _necks(pairs, b_gap, b_source, 1, b_group)
-    np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(batched(searches, pairs, n), expected)
 
 
 @pytest.mark.parametrize("seed", range(10))
