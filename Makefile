@@ -14,8 +14,8 @@ $(STAMP): pyproject.toml
 	$(PY) -m moveability.compiled.build
 	touch $(STAMP)
 
-# the ahead-of-time compiled kernels, rebuilt when a kernel's source changed (about
-# a minute; without them, or when stale, numba's JIT runs the kernels: see
+# the ahead-of-time compiled kernels, rebuilt when a kernel's source changed (three
+# to four minutes on two cores; without them, or when stale, numba's JIT runs the kernels: see
 # src/moveability/compiled/__init__.py)
 kernels: $(STAMP)
 	$(PY) -m moveability.compiled.build
