@@ -169,14 +169,17 @@ def test_axis_flows_first_attach_exactly_what_every_flow_attaches(spec, precisio
 
 
 @pytest.mark.parametrize("n_flags", [1, 7, 8, 9, 26, 63, 64])
-def test_pack_bits_against_sums_of_powers_of_two(n_flags):
-    from moveability.analysis.flows import _pack_bits
+def test_flow_bits_against_sums_of_powers_of_two(n_flags):
+    """The flows' flags packed as _node_flows packs them (one bit a flow, ORed)."""
+    from moveability.analysis.flows import _bit
 
     rng = np.random.default_rng(n_flags)
     flags = rng.random((2, 50, 3, n_flags)) < 0.5
     weights = np.left_shift(np.uint64(1), np.arange(n_flags, dtype=np.uint64))
     expected = (flags.astype(np.uint64) * weights).sum(axis=-1, dtype=np.uint64)
-    packed = _pack_bits(flags)
+    packed = np.zeros(flags.shape[:-1], dtype=np.uint64)
+    for f in range(n_flags):
+        packed |= _bit(flags[..., f], f)
     assert packed.dtype == np.uint64 and np.array_equal(packed, expected)
 
 

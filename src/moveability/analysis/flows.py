@@ -453,24 +453,6 @@ def flow_conditions(
     return _node_flows(mechanism, lo, hi, table, nodes, axes_only)
 
 
-def _pack_bits(flags: NDArray[np.bool_]) -> NDArray[np.uint64]:
-    """The flags along the last axis (at most 64) as the bits of one integer, the
-    first flag in bit 0.
-
-    Examples
-    --------
-    >>> _pack_bits(np.array([[True, False, True], [False, True, False]])).tolist()
-    [5, 2]
-    """
-    if flags.shape[-1] > 64:
-        raise ValueError("at most 64 flags per integer")
-    packed = np.packbits(flags, axis=-1, bitorder="little")
-    wide = np.zeros((*packed.shape[:-1], 8), dtype=np.uint8)
-    wide[..., : packed.shape[-1]] = packed
-    # the eight bytes of each integer, lowest first
-    return wide.view("<u8")[..., 0].astype(np.uint64)
-
-
 #: margins not yet enclosed (see :func:`_node_flows`)
 _UNSET: Any = object()
 

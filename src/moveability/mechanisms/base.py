@@ -367,6 +367,16 @@ def _det_rate_span(
             add_into(o_lo, o_hi, term_lo, term_hi, o_lo, o_hi)
 
 
+
+def kept_in(cache: dict[str, Any] | None, key: str, make: Any) -> Any:
+    """``cache[key]``, made by ``make()`` and kept there the first time; ``make()``
+    alone without a cache (None)."""
+    if cache is None:
+        return make()
+    if key not in cache:
+        cache[key] = make()
+    return cache[key]
+
 class Mechanism:
     """Base class of fully-parallel manipulators with independent legs.
 

@@ -71,6 +71,7 @@ from .base import (
     LegReach,
     Mechanism,
     interval_det,
+    kept_in,
     round_down,
     round_up,
 )
@@ -665,11 +666,7 @@ class DeltaLeg:
         cache: dict[str, Any] | None = None,
     ) -> tuple[NDArray[np.bool_], Interval]:
         """:meth:`fold_flow` by :class:`Interval` operations (the reference)."""
-        terms = None if cache is None else cache.get("fold")
-        if terms is None:
-            terms = self._fold_terms(lo, hi)
-            if cache is not None:
-                cache["fold"] = terms
+        terms = kept_in(cache, "fold", lambda: self._fold_terms(lo, hi))
         grads, s, w, t2, inverse = terms
         _, (ux, uy) = _unit(self.index)
         v = velocity

@@ -23,7 +23,15 @@ from ..errors import InvalidParameterError
 from ..intervals import Interval
 from ..types import Array
 from . import _rr_kernels as kernels
-from .base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, LegReach
+from .base import (
+    FOLD_INNER,
+    FOLD_OUTER,
+    REACH_OUT,
+    REACH_UNKNOWN,
+    REGULAR,
+    LegReach,
+    kept_in,
+)
 
 __all__ = ["RRLeg"]
 
@@ -296,11 +304,7 @@ class RRLeg:
         parts = [flat_bounds(v, n) for v in velocity]
         if parts[0] is None or parts[1] is None:
             return self._fold_flow_intervals(lo, hi, status, branch, velocity, cache)
-        terms = None if cache is None else cache.get("fold_compiled")
-        if terms is None:
-            terms = self._fold_terms_compiled(*boxes)
-            if cache is not None:
-                cache["fold_compiled"] = terms
+        terms = kept_in(cache, "fold_compiled", lambda: self._fold_terms_compiled(*boxes))
         v_lo = np.stack([parts[0][0], parts[1][0]])
         v_hi = np.stack([parts[0][1], parts[1][1]])
         codes = np.ascontiguousarray(np.broadcast_to(status, (n,)), dtype=np.uint8)
@@ -328,11 +332,7 @@ class RRLeg:
         cache: dict[str, Any] | None = None,
     ) -> tuple[NDArray[np.bool_], Interval]:
         """:meth:`fold_flow` by :class:`Interval` operations (the reference)."""
-        terms = None if cache is None else cache.get("fold")
-        if terms is None:
-            terms = self._fold_terms(lo, hi, branch)
-            if cache is not None:
-                cache["fold"] = terms
+        terms = kept_in(cache, "fold", lambda: self._fold_terms(lo, hi, branch))
         dx, dy, rho, rho2, alpha_scale, sign = terms
         d = velocity
         radial = dx * d[0] + dy * d[1]  # rho times d rho
