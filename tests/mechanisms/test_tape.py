@@ -438,3 +438,109 @@ def test_three_rrr_rows_of_a_match_the_interpreted_functions() -> None:
                 rows = leg.a_row_boxes(a, b, q)
                 want = [interpreted(g, a, b, box, q) for g in leg.df_dx]
             assert all(same(x, y) for x, y in zip(rows, want, strict=True))
+
+
+def float_tape_values(t: tp.Tape, columns: list[np.ndarray]) -> np.ndarray:
+    """The float tape ``t`` run by numpy on the float arrays ``columns`` (the pose
+    coordinates and the joint): its derived inputs by their functions, then its
+    operations in order (a second reading of the tape, for the test)."""
+    n = columns[0].size
+    r = np.zeros((t.slots, n))
+    with np.errstate(all="ignore"):
+        for i, c in enumerate(columns):
+            r[i] = c
+        for d, (function, args) in enumerate(t.derived):
+            r[t.k + 1 + d] = function(*(r[a] for a in args))
+        first = t.k + 1 + len(t.derived)
+        r[first : first + t.const_lo.size] = t.const_lo[:, None]
+        for op, target, a, b in t.code:
+            r[target] = [r[a] + r[b], r[a] - r[b], r[a] * r[b], -r[a], r[a] * r[a]][op]
+    return r[t.out]
+
+
+FLOAT_TRACED = [
+    *TRACED,
+    sympy.E * X - sympy.Float(0.3) * sympy.pi * Y**2 + sympy.Rational(-7, 9) * A**2 * Q,
+    sympy.Abs(X) * Y - sympy.sign(Y) * sympy.tan(Q) + A * sympy.log(sympy.Abs(Q) + 1) * 0,
+    (X * sympy.cos(Q) - Y * sympy.sin(Q)) ** 2 - (A + sympy.Rational(1, 10)) ** 2 * X,
+]
+
+
+@pytest.mark.parametrize("values", [[2.5], [0.1], [-3.7e-5]])
+def test_float_tape_is_the_float_path(values) -> None:
+    """``BoundExpression.float_tape`` records what the expression does on float
+    arrays: run by numpy, it gives the float path's values bit for bit (NaN where
+    it gives NaN), on arrays mixing ordinary numbers, zeros, infinities and NaN,
+    for the custom five-bar's constraints and expressions with parameters,
+    rationals, decimals, pi, e and functions of the inputs. Untraceable
+    expressions have no float tape."""
+    rng = np.random.default_rng(11)
+    mechanism = from_spec(load_spec("examples/five-bar-custom.toml"))
+    functions = [leg.f for leg in mechanism.legs]
+    functions += [
+        BoundExpression(compile_expression(e, [X, Y, Q, A]), values, 2) for e in FLOAT_TRACED
+    ]
+    for g in functions:
+        t = g.float_tape
+        assert t is not None and np.array_equal(t.const_lo, t.const_hi)
+        columns = [rng.normal(size=3000) * 10.0 ** rng.integers(-3, 4, size=3000) for _ in range(3)]
+        for c in columns:
+            special = rng.random(c.size) < 0.03
+            c[special] = rng.choice(SPECIAL, size=int(special.sum()))
+        with np.errstate(all="ignore"):
+            want = np.broadcast_to(np.asarray(g(*columns), dtype=np.float64), columns[0].shape)
+        got = float_tape_values(t, columns)
+        assert np.array_equal(got, want, equal_nan=True)
+        assert np.isfinite(want).sum() > 1000  # (sqrt of x < 0 is NaN)
+    for e in (X / (Y + 3), sympy.sqrt(X + Y) * Q, (X + Q) ** 3):
+        assert BoundExpression(compile_expression(e, [X, Y, Q, A]), values, 2).float_tape is None
+
+
+#: a five-bar written with equal links (its inner folds meet at the base points),
+#: a decimal length, pi and a rational
+EQUAL_LINKS = {
+    "mechanism": "custom",
+    "pose": ["x", "y"],
+    "joints": ["t1", "t2"],
+    "parameters": {"L0": 6.3, "L": 5.0},
+    "legs": [
+        {"joint": "t1", "constraint": "(x - L*cos(t1))**2 + (y - L*sin(t1))**2 - L**2"},
+        {
+            "joint": "t2",
+            "constraint": "(x - L0 - (pi + 1/7)*cos(t2))**2 + (y - L*sin(t2))**2 - 0.1*L**2",
+        },
+    ],
+    "limits": {"t1": [0.0, 3.0], "t2": [-2.0, 2.0]},
+    "bounds": {"x": [-12, 18], "y": [-12, 12]},
+}
+
+
+@pytest.mark.parametrize(
+    "source", ["examples/five-bar-custom.toml", "equal links", "examples/delta-custom.toml"]
+)
+def test_custom_compiled_fold_matches_the_interpreted_one(source, monkeypatch) -> None:
+    """The fold certificates of user-defined legs, compiled (the interval tapes
+    and ``F``'s float tape in one kernel) and interpreted (``_fold_interpreted``):
+    the same on every call ``reach`` makes, bit for bit, over random boxes of
+    every size, many of them folds, some fold-connected."""
+    from moveability.mechanisms.custom import CustomMechanism
+
+    if source == "equal links":
+        mechanism = CustomMechanism(EQUAL_LINKS)
+    else:
+        mechanism = from_spec(load_spec(source))
+    rng = np.random.default_rng(12)
+    low, high = (np.asarray(b, dtype=float) for b in mechanism.bounds)
+    k = low.size
+    n_fold = n_connected = n_certified = 0
+    legs = [leg for leg in mechanism.legs if leg._fold_programs() is not None]
+    # (two of the Delta's legs have a derivative without a tape)
+    assert len(legs) == (1 if "delta" in source else 2)
+    for leg in legs:
+        centre = rng.uniform(low, high, size=(2000, k))
+        size = rng.choice([0.0, 1e-3, 0.01, 0.03, 0.1, 0.5], size=(2000, 1)) * (high - low) / 10
+        compiled, seen = reach_both_folds(leg, centre - size, centre + size, monkeypatch)
+        n_fold += int(np.isin(compiled.status, (2, 3)).sum())
+        n_connected += int(compiled.fold_connected.sum())
+        n_certified += sum(int((s[0] != 0).sum()) for s in seen)  # by the compiled fold
+    assert n_fold > 50 and n_connected > 20 and n_certified >= n_fold, (n_fold, n_connected)

@@ -355,10 +355,13 @@ def _compile_body(body: str, n_args: int, key: str) -> Callable[..., Any]:
     float_ns: dict[str, Any] = dict(_FLOAT_NS)
     interval_ns: dict[str, Any] = dict(_INTERVAL_NS)
     trace_ns: dict[str, Any] = {name: tp.traced(f, name) for name, f in _COMMON.items()}
+    float_trace_ns = dict(trace_ns)
     trace_ns.update(PI=tp.constant(lambda: _PI_IV)(), rational=tp.constant(iv.rational))
+    float_trace_ns.update(PI=_FLOAT_NS["PI"], rational=_rational_float)
     exec(code, float_ns)  # the source is printed from a checked sympy tree
     exec(code, interval_ns)
     exec(code, trace_ns)
+    exec(code, float_trace_ns)
     g_float, g_interval = float_ns["_g"], interval_ns["_g"]
 
     def g(*values: Any) -> Any:
@@ -370,8 +373,10 @@ def _compile_body(body: str, n_args: int, key: str) -> Callable[..., Any]:
             return g_float(*values)
 
     g.__doc__ = f"{key}: {body}"
-    # the same source on tracers (moveability.mechanisms.tape), for BoundExpression.tape
+    # the same source on tracers (moveability.mechanisms.tape), for BoundExpression.tape,
+    # and with the constants of the float path, for BoundExpression.float_tape
     g.traceable = trace_ns["_g"]  # type: ignore[attr-defined]
+    g.float_traceable = float_trace_ns["_g"]  # type: ignore[attr-defined]
     return g
 
 
@@ -393,26 +398,39 @@ class BoundExpression:
 
     def __init__(self, g: Callable[..., Any], values: Sequence[float], k: int) -> None:
         self.g, self.values, self.k = g, tuple(values), k
-        self._tape: tp.Tape | bool | None = False
+        self._tapes: dict[str, tp.Tape | None] = {}
 
     def __call__(self, *xs: Any) -> Any:
         return self.g(*xs, *self.values)
 
-    @property
-    def tape(self) -> tp.Tape | None:
-        """The traced tape (built on first use)."""
-        if self._tape is False:
-            traceable = getattr(self.g, "traceable", None)
+    def _traced(self, name: str, constant: Callable[[float], Any]) -> tp.Tape | None:
+        """The tape of ``self.g``'s ``name`` source with each parameter as
+        ``constant`` makes it (built on first use; None where it cannot be traced)."""
+        if name not in self._tapes:
+            traceable = getattr(self.g, name, None)
             tape = None
             if traceable is not None:
+                values = [constant(v) for v in self.values]
                 try:
-                    # the parameters as the interpreted path takes them (see _compile_body)
-                    values = [tp.constant(_exact)(v) for v in self.values]
                     tape = tp.trace(lambda *xs: traceable(*xs, *values), self.k)
                 except tp.Untraceable:
                     tape = None
-            self._tape = tape
-        return self._tape if isinstance(self._tape, tp.Tape) else None
+            self._tapes[name] = tape
+        return self._tapes[name]
+
+    @property
+    def tape(self) -> tp.Tape | None:
+        """The traced tape (built on first use)."""
+        # the parameters as the interpreted path takes them (see _compile_body)
+        return self._traced("traceable", tp.constant(_exact))
+
+    @property
+    def float_tape(self) -> tp.Tape | None:
+        """The operations the expression performs on float arrays, in order (its
+        constants floats, operated on as the float path does), or None where it
+        cannot be traced: what the compiled fold certificates evaluate
+        (:func:`moveability.mechanisms._fold_kernels.float_program`)."""
+        return self._traced("float_traceable", lambda v: v)
 
 
 def modular(expr: sympy.Expr) -> sympy.Expr:
