@@ -31,7 +31,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import click
 
 from .. import __version__
-from . import running
+from . import process, running
 from .analyze import analyze_command
 from .export import export_command
 from .feasible import feasible_command
@@ -42,7 +42,7 @@ from .regions import regions_command
 from .report import report_command
 from .sweep import sweep_command
 
-__all__ = ["main"]
+__all__ = ["main", "run"]
 
 
 class _Commands(click.Group):
@@ -74,3 +74,15 @@ main.add_command(plot_command)
 main.add_command(report_command)
 main.add_command(export_command)
 main.add_command(sweep_command)
+
+
+def run() -> None:
+    """The ``moveability`` console script: :func:`main` in a process whose
+    allocator keeps freed blocks for reuse, ended at once when the command is
+    done (see :mod:`.process`). :func:`main` itself changes neither."""
+    process.tune_allocator()
+    try:
+        main()  # click ends its standalone mode by raising SystemExit
+    except SystemExit as exc:
+        process.finish(exc.code)
+    process.finish(0)
