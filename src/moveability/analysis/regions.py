@@ -183,34 +183,6 @@ def _join_sub_nodes(
                     union_sets(parent1, u, v)
 
 
-@kernel(inline=True)
-def _join_nodes(
-    parent0: NDArray[np.int64],
-    parent1: NDArray[np.int64],
-    alive: NDArray[np.bool_],
-    has: NDArray[np.bool_],
-    bounds: NDArray[np.float64],
-    piece_of: NDArray[np.int64],
-    seeded: NDArray[np.bool_],
-    certain: NDArray[np.int64],
-    i: int,
-    p: int,
-    j: int,
-    q: int,
-    tol: float,
-) -> None:  # pragma: no cover - compiled
-    """For :func:`_possible_labels_both`: the sub-nodes of node (i, p) and node (j,
-    q) joined (:func:`_join_sub_nodes`) in the union-find of each sign for which
-    both may hold configurations; nothing where both are seeded in one certain
-    component (already joined)."""
-    if seeded[i, p] and seeded[j, q] and certain[i, p] == certain[j, q]:
-        return
-    both0 = alive[0, i, p] and alive[0, j, q]
-    both1 = alive[1, i, p] and alive[1, j, q]
-    if both0 or both1:
-        _join_sub_nodes(parent0, parent1, both0, both1, has, bounds, piece_of, i, p, j, q, tol)
-
-
 @kernel
 def _seed_certain(
     parent0: NDArray[np.int64],
@@ -296,20 +268,25 @@ def _possible_labels_both(
     parent0 = np.arange(n * n_post * slots)
     parent1 = np.arange(n * n_post * slots)
     seeded = _seed_certain(parent0, parent1, alive, has, certain, sign)
-    for t in range(pairs.shape[0]):
-        i, j = pairs[t, 0], pairs[t, 1]
-        for p in range(n_post):
-            _join_nodes(
-                parent0, parent1, alive, has, bounds, piece_of, seeded, certain, i, p, j, p, tol
-            )
-    for k in range(pq.shape[0]):
-        p, q = pq[k, 0], pq[k, 1]
-        for i in range(n):
-            if not same_leaf[k, i]:
-                continue
-            _join_nodes(
-                parent0, parent1, alive, has, bounds, piece_of, seeded, certain, i, p, i, q, tol
-            )
+    # the node pairs to join: (pair, posture) of touching leaves, then (posture
+    # pair, leaf) within a leaf; one loop whose body calls a helper only for the
+    # nodes that join (a call with many arrays per pair costs more than the pair)
+    within = np.argwhere(same_leaf)
+    n_touching = pairs.shape[0] * n_post
+    for t in range(n_touching + within.shape[0]):
+        if t < n_touching:
+            row = t // n_post
+            p = t - row * n_post
+            i, j, q = pairs[row, 0], pairs[row, 1], p
+        else:
+            k, i = within[t - n_touching, 0], within[t - n_touching, 1]
+            p, q, j = pq[k, 0], pq[k, 1], i
+        if seeded[i, p] and seeded[j, q] and certain[i, p] == certain[j, q]:
+            continue  # one certain component, already joined
+        both0 = alive[0, i, p] and alive[0, j, q]
+        both1 = alive[1, i, p] and alive[1, j, q]
+        if both0 or both1:
+            _join_sub_nodes(parent0, parent1, both0, both1, has, bounds, piece_of, i, p, j, q, tol)
     labels = np.empty((2, parent0.size), dtype=np.int64)
     counts = np.zeros(2, dtype=np.int64)
     labels[0], counts[0] = relabel_roots(parent0, taken[0])
