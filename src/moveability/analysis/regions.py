@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..compiled import kernel
-from ..hypertree._kernels import edge_labels, relabel_roots, union_sets
+from ..hypertree._kernels import edge_labels, relabel_roots_into, union_sets
 from ..hypertree.status import IN
 from ..limits import JointLimit
 from .sheets import SheetTable
@@ -289,8 +289,9 @@ def _possible_labels_both(
             _join_sub_nodes(parent0, parent1, both0, both1, has, bounds, piece_of, i, p, j, q, tol)
     labels = np.empty((2, parent0.size), dtype=np.int64)
     counts = np.zeros(2, dtype=np.int64)
-    labels[0], counts[0] = relabel_roots(parent0, taken[0])
-    labels[1], counts[1] = relabel_roots(parent1, taken[1])
+    # each sign's scratch an array done with: the other row, then parent0
+    counts[0] = relabel_roots_into(parent0, taken[0], labels[0], labels[1])
+    counts[1] = relabel_roots_into(parent1, taken[1], labels[1], parent0)
     return labels, counts
 
 

@@ -50,19 +50,34 @@ def relabel_roots(
     parent: NDArray[np.int64], taken: NDArray[np.bool_]
 ) -> tuple[NDArray[np.int64], int]:  # pragma: no cover - compiled
     """Labels of the taken elements' sets, numbered by first element (-1 elsewhere)."""
-    n = parent.size
-    labels = np.full(n, -1, dtype=np.int64)
-    root_label = np.full(n, -1, dtype=np.int64)
+    labels = np.empty(parent.size, dtype=np.int64)
+    count = relabel_roots_into(parent, taken, labels, np.empty(parent.size, dtype=np.int64))
+    return labels, count
+
+
+@kernel
+def relabel_roots_into(
+    parent: NDArray[np.int64],
+    taken: NDArray[np.bool_],
+    out: NDArray[np.int64],
+    scratch: NDArray[np.int64],
+) -> int:  # pragma: no cover - compiled
+    """:func:`relabel_roots` into ``out``, with ``scratch`` (as long, overwritten)
+    for the roots' labels: returns the count. (A caller done with an array of its
+    own lends it as the scratch: no fresh memory for a large union-find.)"""
+    for i in range(scratch.size):
+        scratch[i] = -1
     count = 0
-    for i in range(n):
+    for i in range(parent.size):
         if not taken[i]:
+            out[i] = -1
             continue
         r = _find(parent, i)
-        if root_label[r] < 0:
-            root_label[r] = count
+        if scratch[r] < 0:
+            scratch[r] = count
             count += 1
-        labels[i] = root_label[r]
-    return labels, count
+        out[i] = scratch[r]
+    return count
 
 
 @kernel
