@@ -351,47 +351,53 @@ def _same_fold_flow(
 
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the references' infinities
-@pytest.mark.parametrize("kept", [True, False])
+@pytest.mark.parametrize("sheets", [True, False])
 @pytest.mark.parametrize("name", sorted(DESIGNS))
-def test_det_a_boxes_of_the_sheets_angles(
-    name: str, kept: bool, monkeypatch: pytest.MonkeyPatch
+def test_det_a_postures_bit_for_bit(
+    name: str, sheets: bool, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """With the angles as the sheets take them (each leg's branch where it is
-    regular, else the hull), every posture's mean-value form comes from one
-    pass for all postures (``mean_value_all``; the one-posture kernel must not
-    run), and is the reference's, bit for bit: with the branches the legs kept
-    of the boxes' reach (``kept``; then the enclosures of the rows too, from
-    ``det_a_all``), and with those of the reach of the boxes where every leg is
-    regular alone."""
+    """``det_a_postures``: every posture's enclosure from one pass for all the
+    postures (``det_a_all`` and ``mean_value_all``; the one-posture kernels must
+    not run), and the reference's, bit for bit, posture by posture: with each
+    leg's enclosure on each branch as the sheets take them (the branch's where
+    the leg is regular, else the hull), and with enclosures of every kind
+    (``sheets`` False: random, points, wider than a turn, infinite, NaN)."""
     from moveability.mechanisms import _delta_kernels
 
     def forbidden(*args: object) -> None:
         raise AssertionError("a one-posture kernel ran")
 
-    d = DESIGNS[name]
-    m = Delta(d.base_radius, d.platform_radius, d.arm, d.rod)  # no kept boxes
+    m = DESIGNS[name]
     lo, hi = _leg_boxes(m, seed=len(name) + 3)
+    n = lo.shape[0]
     reaches = [leg.reach(lo, hi) for leg in m.delta_legs]
-    if kept:
-        # every posture's enclosures from det_a_all too
-        monkeypatch.setattr(_delta_kernels, "det_a_prepare", forbidden)
-    else:
-        for leg in m.delta_legs:
-            leg.reach(lo[:3], hi[:3])
+    rng = np.random.default_rng(len(name))
+    branch_angles = []
+    for r in reaches:
+        regular = r.status == REGULAR
+        pair = []
+        for b in range(2):
+            a_lo = np.where(regular, r.branches[b].lo, r.hull.lo)
+            a_hi = np.where(regular, r.branches[b].hi, r.hull.hi)
+            if not sheets:
+                odd = rng.random(n) < 0.3
+                t = rng.uniform(-4, 4, n)
+                width = np.where(rng.random(n) < 0.2, 0.0, 10.0 ** rng.uniform(-12, 0.8, n))
+                a_lo, a_hi = np.where(odd, t, a_lo), np.where(odd, t + width, a_hi)
+                bad = np.flatnonzero(rng.random(n) < 0.02)
+                a_lo[bad] = rng.choice([-np.inf, np.nan, -0.0], bad.size)
+                a_hi[bad] = rng.choice([np.inf, np.nan, 0.0], bad.size)
+            pair.append(Interval(a_lo, a_hi))
+        branch_angles.append(pair)
+    monkeypatch.setattr(_delta_kernels, "det_a_prepare", forbidden)
     monkeypatch.setattr(_delta_kernels, "mean_value_bounds", forbidden)
+    got = m.det_a_postures(lo, hi, branch_angles)
+    monkeypatch.undo()
     narrowed = 0
-    for posture in range(m.postures.shape[0]):
-        angles = []
-        for i, r in enumerate(reaches):
-            branch = r.branches[int(m.postures[posture][i])]
-            regular = r.status == REGULAR
-            angles.append(
-                Interval(
-                    np.where(regular, branch.lo, r.hull.lo), np.where(regular, branch.hi, r.hull.hi)
-                )
-            )
-        got = m.det_a_boxes(lo, hi, angles, posture=posture)
-        _same(got, m._det_a_boxes_intervals(lo, hi, angles, posture=posture))
+    for posture, branches in enumerate(m.postures):
+        angles = [branch_angles[i][int(b)] for i, b in enumerate(branches)]
+        _same(got[posture], m._det_a_boxes_intervals(lo, hi, angles, posture=posture))
+        _same(got[posture], m.det_a_boxes(lo, hi, angles, posture=posture))
         plain = m._det_a_boxes_intervals(lo, hi, angles)
-        narrowed += int(((got.lo != plain.lo) | (got.hi != plain.hi)).sum())
-    assert narrowed > 100
+        narrowed += int(((got[posture].lo != plain.lo) | (got[posture].hi != plain.hi)).sum())
+    assert narrowed > 100  # the mean-value form ran and narrowed

@@ -48,6 +48,7 @@ vectors: enclosures use an enclosure of ``sqrt(3)/2``, points its float.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -433,41 +434,11 @@ class DeltaLeg:
             np.arctan2(turned[y], turned[x], out=corners[i])
         out_lo, out_hi = np.empty((3, n)), np.empty((3, n))
         leg_kernels.reach_finish(fold, cs, sn, ref, corners, turned, acos, out_lo, out_hi)
-        # kept for the last boxes, for Delta._mean_values and _plain_forms
-        self.__dict__["_last_branches"] = (lo.copy(), hi.copy(), out_lo, out_hi, status.copy())
         return LegReach(
             status=status,
             branches=[Interval(out_lo[0], out_hi[0]), Interval(out_lo[1], out_hi[1])],
             hull=Interval(out_lo[2], out_hi[2]),
             fold_connected=connected,
-        )
-
-    def sheet_angles(self, lo: Array, hi: Array) -> tuple[Array, Array] | None:
-        """The angle enclosures of both branches as the sheets take them (the
-        branch's where the leg is regular, else the hull of both), (2, n) lower
-        and upper bounds, from the reach kept of the boxes ``[lo, hi]`` (n, 3)
-        (bit for bit); None where the last reach was of other boxes."""
-        last = self.__dict__.get("_last_branches")
-        if last is None or not (_same_bits(last[0], lo) and _same_bits(last[1], hi)):
-            return None
-        regular = last[4] == REGULAR
-        return (
-            np.stack([np.where(regular, last[2][b], last[2][2]) for b in range(2)]),
-            np.stack([np.where(regular, last[3][b], last[3][2]) for b in range(2)]),
-        )
-
-    def branches_at(self, lo: Array, hi: Array, idx: NDArray[np.intp]) -> tuple[Array, Array]:
-        """The bounds of both branches' enclosures (:meth:`reach`) over the boxes
-        ``idx`` of ``[lo, hi]`` (n, 3), (2, m) each: those of the last boxes'
-        reach where ``[lo, hi]`` are those boxes (bit for bit), else the reach of
-        the boxes ``idx``."""
-        last = self.__dict__.get("_last_branches")
-        if last is not None and _same_bits(last[0], lo) and _same_bits(last[1], hi):
-            return last[2][:2, idx], last[3][:2, idx]
-        reach = self.reach(lo[idx], hi[idx])
-        return (
-            np.stack([reach.branches[0].lo, reach.branches[1].lo]),
-            np.stack([reach.branches[0].hi, reach.branches[1].hi]),
         )
 
     def _reach_intervals(self, lo: Array, hi: Array) -> LegReach:
@@ -758,12 +729,6 @@ def _minus(a: list[Interval], b: list[Interval]) -> list[Interval]:
     return [x - y for x, y in zip(a, b, strict=True)]
 
 
-def _same_bits(a: Array, b: Array) -> bool:
-    """Whether two float arrays hold the same floats, bit for bit."""
-    a, b = np.ascontiguousarray(a), np.ascontiguousarray(b)
-    return a.shape == b.shape and bool(np.array_equal(a.view(np.uint64), b.view(np.uint64)))
-
-
 def _no_nan(x: Interval) -> Interval:
     """``x`` with NaN bounds made infinite (none is expected: every term is
     bounded; a NaN bound would say nothing, and compare false)."""
@@ -1014,117 +979,68 @@ class Delta(Mechanism):
         a_lo = np.stack([parts[0][0], parts[1][0], parts[2][0]])
         a_hi = np.stack([parts[0][1], parts[1][1], parts[2][1]])
         legs = self._leg_constants
-        trig = None
-        plain = None if posture is None else self._plain_forms(lo, hi)
-        branches = np.asarray(self.postures[posture or 0], dtype=np.int64)
-        if plain is not None and all(
-            _same_bits(a_lo[k], plain[2][branches[k], k])
-            and _same_bits(a_hi[k], plain[3][branches[k], k])
-            for k in range(3)
-        ):
-            # the angles are the legs' as the sheets take them: every posture's
-            # enclosure, computed at the first
-            out_lo, out_hi = plain[0][posture].copy(), plain[1][posture].copy()
-        else:
-            out_lo, out_hi = np.empty(n), np.empty(n)
-            trig = np.empty((4, 3, n))
-            kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, out_lo, out_hi, trig)
+        out_lo, out_hi = np.empty(n), np.empty(n)
+        trig = np.empty((4, 3, n))
+        kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, out_lo, out_hi, trig)
         if posture is None:
             return Interval(out_lo, out_hi)
         idx, centre_trig = self._centres(lo, hi)
-        if not idx.size:
-            return Interval(out_lo, out_hi)
-        sub_lo, sub_hi = out_lo[idx], out_hi[idx]
-        forms = self._mean_values(lo, hi, idx, centre_trig)
-        if all(
-            _same_bits(a_lo[k, idx], forms[2][branches[k], k])
-            and _same_bits(a_hi[k, idx], forms[3][branches[k], k])
-            for k in range(3)
-        ):
-            # the angles are the legs' branches there (as the sheets take them):
-            # the form of every posture, computed at the first
-            kernels.intersect_finite(forms[0][posture], forms[1][posture], sub_lo, sub_hi)
-        else:
-            if trig is None:
-                # the cosines and sines of the angles (the enclosures unused)
-                trig = np.empty((4, 3, n))
-                kernels.det_a_prepare(lo, hi, a_lo, a_hi, legs, np.empty(n), np.empty(n), trig)
+        if idx.size:
+            sub_lo, sub_hi = out_lo[idx], out_hi[idx]
+            branches = np.asarray(self.postures[posture], dtype=np.int64)
             kernels.mean_value_bounds(
                 lo[idx], hi[idx], np.ascontiguousarray(trig[:, :, idx]), branches, centre_trig,
                 legs, sub_lo, sub_hi,
             )  # fmt: skip
-        out_lo[idx], out_hi[idx] = sub_lo, sub_hi
+            out_lo[idx], out_hi[idx] = sub_lo, sub_hi
         return Interval(out_lo, out_hi)
 
-    def _plain_forms(self, lo: Array, hi: Array) -> tuple[Array, Array, Array, Array] | None:
-        """The enclosure of :meth:`_det_a_plain` of every posture over the boxes
-        (n, 3), with the legs' angles as the sheets take them (each leg's
-        branch where it is regular, else the hull of both) from the reach the
-        legs have kept of these boxes (:meth:`DeltaLeg.sheet_angles`): (P, n)
-        lower and upper bounds, then the angles' bounds (2, 3, n) they were
-        computed with; None where a leg kept no reach of these boxes. By
-        :func:`._delta_kernels.det_a_all`: what depends on one leg's angle alone
-        is computed once for the postures, not once for each. Kept for the last
-        boxes."""
-        kept = [leg.__dict__.get("_last_branches") for leg in self.delta_legs]
-        last = self.__dict__.get("_last_plain")
-        if last is not None and all(a is b for a, b in zip(last[0], kept, strict=True)):
-            return last[1], last[2], last[3], last[4]
-        a_lo, a_hi = np.empty((2, 3, lo.shape[0])), np.empty((2, 3, lo.shape[0]))
-        for k, leg in enumerate(self.delta_legs):
-            angles = leg.sheet_angles(lo, hi)
-            if angles is None:
-                return None
-            a_lo[:, k], a_hi[:, k] = angles
+    def det_a_postures(
+        self, lo: Array, hi: Array, branch_angles: Sequence[Sequence[Interval | None]]
+    ) -> list[Interval]:
+        """:meth:`det_a_boxes` of every posture, bit for bit, in two passes over the
+        boxes for all the postures: the stacked rows by
+        :func:`._delta_kernels.det_a_all` and the mean-value form by
+        ``mean_value_all``, each computing what one leg's branch determines once
+        for the postures that take it (the same operations on the same operands
+        as ``det_a_prepare`` and ``mean_value_bounds`` of each posture)."""
+        boxes = _pose_boxes(lo, hi)
+        if boxes is None or len(branch_angles) != 3:
+            return super().det_a_postures(lo, hi, branch_angles)
+        lo, hi = boxes
+        n = lo.shape[0]
+        a_lo, a_hi = np.empty((2, 3, n)), np.empty((2, 3, n))
+        for k in range(3):
+            for b in range(2):
+                part = None if len(branch_angles[k]) <= b else branch_angles[k][b]
+                bounds = None if part is None else flat_bounds(part, n)
+                if bounds is None:
+                    return super().det_a_postures(lo, hi, branch_angles)
+                a_lo[b, k], a_hi[b, k] = bounds
         postures = np.ascontiguousarray(self.postures, dtype=np.int64)
         n_post = postures.shape[0]
-        forms_lo, forms_hi = np.empty((n_post, lo.shape[0])), np.empty((n_post, lo.shape[0]))
-        kernels.det_a_all(lo, hi, a_lo, a_hi, postures, self._leg_constants, forms_lo, forms_hi)
-        self.__dict__["_last_plain"] = (tuple(kept), forms_lo, forms_hi, a_lo, a_hi)
-        return forms_lo, forms_hi, a_lo, a_hi
-
-    def _mean_values(
-        self, lo: Array, hi: Array, idx: NDArray[np.intp], centre_trig: Array
-    ) -> tuple[Array, Array, Array, Array]:
-        """The mean-value form of every posture (not intersected) over the boxes
-        ``idx`` where every leg is regular (from :meth:`_centres`, whose ``idx``
-        and ``centre_trig`` they are), with the legs' branches' enclosures there
-        (:meth:`DeltaLeg.branches_at`): (P, m) lower and upper bounds, then the
-        branches' bounds (2, 3, m) they were computed with. By
-        :func:`._delta_kernels.mean_value_all`: what depends on one leg's branch
-        alone is computed once for the postures, not once for each. Kept for the
-        last boxes (the sheets ask for every posture over the same boxes)."""
-        last = self.__dict__.get("_last_forms")
-        if last is not None and last[0] is idx:
-            return last[1], last[2], last[3], last[4]
-        blo, bhi = lo[idx], hi[idx]
-        m = idx.size
-        b_lo, b_hi = np.empty((2, 3, m)), np.empty((2, 3, m))
-        for k, leg in enumerate(self.delta_legs):
-            # the sheets have just taken the reach of these boxes
-            b_lo[:, k], b_hi[:, k] = leg.branches_at(lo, hi, idx)
-        postures = np.ascontiguousarray(self.postures, dtype=np.int64)
-        forms_lo, forms_hi = np.empty((postures.shape[0], m)), np.empty((postures.shape[0], m))
-        kernels.mean_value_all(
-            blo, bhi, b_lo, b_hi, postures, centre_trig, self._leg_constants, forms_lo, forms_hi
-        )
-        self.__dict__["_last_forms"] = (idx, forms_lo, forms_hi, b_lo, b_hi)
-        return forms_lo, forms_hi, b_lo, b_hi
+        legs = self._leg_constants
+        out_lo, out_hi = np.empty((n_post, n)), np.empty((n_post, n))
+        kernels.det_a_all(lo, hi, a_lo, a_hi, postures, legs, out_lo, out_hi)
+        idx, centre_trig = self._centres(lo, hi)
+        if idx.size:
+            m = idx.size
+            forms_lo, forms_hi = np.empty((n_post, m)), np.empty((n_post, m))
+            kernels.mean_value_all(
+                lo[idx], hi[idx], np.ascontiguousarray(a_lo[:, :, idx]),
+                np.ascontiguousarray(a_hi[:, :, idx]), postures, centre_trig, legs,
+                forms_lo, forms_hi,
+            )  # fmt: skip
+            for p in range(n_post):
+                sub_lo, sub_hi = out_lo[p, idx], out_hi[p, idx]
+                kernels.intersect_finite(forms_lo[p], forms_hi[p], sub_lo, sub_hi)
+                out_lo[p, idx], out_hi[p, idx] = sub_lo, sub_hi
+        return [Interval(out_lo[p], out_hi[p]) for p in range(n_post)]
 
     def _centres(self, lo: Array, hi: Array) -> tuple[NDArray[np.intp], Array]:
         """The boxes where every leg is regular, and the cosines and sines of both
         branches' angles at their centres (2, 4, 3, m: see
-        ``_delta_kernels.centre_trig``), for :meth:`det_a_boxes`. Kept for the
-        last boxes (the same floats, bit for bit): the sheets ask for every
-        posture over the same boxes."""
-        last = self.__dict__.get("_last_centres")
-        if (
-            last is not None
-            and last[0].shape == lo.shape
-            and np.array_equal(last[0].view(np.uint64), lo.view(np.uint64))
-            and np.array_equal(last[1].view(np.uint64), hi.view(np.uint64))
-        ):
-            return last[2], last[3]
+        ``_delta_kernels.centre_trig``), for the mean-value form of det A."""
         legs = self._leg_constants
         regular = np.empty(lo.shape[0], dtype=bool)
         kernels.regular_boxes(lo, hi, legs, regular)
@@ -1150,7 +1066,6 @@ class Delta(Mechanism):
         kernels.centre_angles(cs, sn, ref, corners, turned, acos, centre)
         trig = np.empty((2, 4, 3, m))
         kernels.centre_trig(centre, trig)
-        self.__dict__["_last_centres"] = (lo.copy(), hi.copy(), idx, trig)
         return idx, trig
 
     def _det_a_boxes_intervals(
