@@ -29,9 +29,9 @@ from numpy.typing import NDArray
 
 from ..hypertree.status import BOUNDARY, IN, OUT
 from ..intervals import Interval
-from ..limits import INSIDE, OUTSIDE
 from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR, Mechanism
 from ..types import Array
+from ._sheet_kernels import posture_rows
 
 __all__ = ["SheetTable", "classify_sheets", "stack_tables"]
 
@@ -160,15 +160,6 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
     leg_status = np.stack([r.status for r in reaches], axis=1).astype(np.uint8)
     postures = mechanism.postures
     n_post = postures.shape[0]
-    status = np.full((n, n_post), BOUNDARY, dtype=np.uint8)
-    sign = np.zeros((n, n_post), dtype=np.int8)
-    exists = np.zeros((n, n_post), dtype=bool)
-    within = np.zeros((n, n_post), dtype=bool)
-    group = np.zeros((n, n_post), dtype=bool)
-    det_lo = np.zeros((n, n_post))
-    det_hi = np.zeros((n, n_post))
-    angles_lo = np.zeros((n, n_post, len(legs)))
-    angles_hi = np.zeros((n, n_post, len(legs)))
 
     singular = np.array([mechanism.identically_singular(p) for p in range(n_post)], dtype=bool)
     # limits of each leg's hull where it folds, and of each branch (the hull's
@@ -236,49 +227,65 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         with np.errstate(invalid="ignore"):
             dets = mechanism.det_a_postures(lo, hi, branch_angles)
 
+    # the constraints beyond the paper, posture by posture (mechanism-specific)
+    beyond_rows: list[Any] = []
+    sign_rows: list[Any] = []
+    beyond_row = np.full(n_post, -1, dtype=np.int64)
+    signs_row = np.full(n_post, -1, dtype=np.int64)
+    regular_legs = leg_status == REGULAR
     for p in range(n_post):
         angles: list[Interval] = []
-        lim_in = np.ones(n, dtype=bool)
-        lim_out = np.zeros(n, dtype=bool)
         for i, b in enumerate(postures[p]):
             a = branch_angles[i][b]
             assert a is not None
-            code = branch_codes[i][b]
             angles.append(a)
-            angles_lo[:, p, i] = a.lo
-            angles_hi[:, p, i] = a.hi
-            lim_in &= code == INSIDE
-            lim_out |= code == OUTSIDE
-        # passive limits, obstacles, collisions: part of what a valid configuration
-        # is; and a sign of det A whose every configuration violates one
         with np.errstate(invalid="ignore"):
-            beyond, signs = mechanism.constraint_checks(
-                lo, hi, angles, p, leg_status == REGULAR
-            )
+            beyond, signs = mechanism.constraint_checks(lo, hi, angles, p, regular_legs)
         if beyond is not None:
-            lim_in &= beyond == INSIDE
-            lim_out |= beyond == OUTSIDE
-        det = dets[p] if dets is not None else pose_det
-        assert det is not None
+            beyond_row[p] = len(beyond_rows)
+            beyond_rows.append(np.broadcast_to(beyond, (n,)))
         if signs is not None:
-            no_plus, no_minus = signs
-            lim_out |= no_plus & no_minus
-            det = Interval(
-                np.where(no_minus, np.maximum(det.lo, 0.0), det.lo),
-                np.where(no_plus, np.minimum(det.hi, 0.0), det.hi),
-            )
-        det_lo[:, p], det_hi[:, p] = det.lo, det.hi
-        positive = det.lo > 0
-        negative = det.hi < 0
-        sign[:, p] = np.where(positive, 1, np.where(negative, -1, 0))
-        all_regular = ~any_fold & ~any_out
-        exists[:, p] = all_regular
-        within[:, p] = lim_in
-        dead = any_out | lim_out
-        status[:, p] = np.where(
-            dead, OUT, np.where(all_regular & lim_in & (sign[:, p] != 0), IN, BOUNDARY)
-        )
-        group[:, p] = fold_ok & lim_in & (sign[:, p] != 0)
+            signs_row[p] = len(sign_rows)
+            sign_rows.append(signs)
+    # then every posture's row of the table in one pass over the boxes
+    n_branch = max(len(r.branches) for r in reaches) if legs else 0
+    codes = np.zeros((len(legs), n_branch, n), dtype=np.uint8)
+    ang_lo = np.zeros((len(legs), n_branch, n))
+    ang_hi = np.zeros((len(legs), n_branch, n))
+    for i in range(len(legs)):
+        for b, a in enumerate(branch_angles[i]):
+            if a is not None:
+                codes[i, b] = branch_codes[i][b]
+                ang_lo[i, b], ang_hi[i, b] = a.lo, a.hi
+    if dets is not None:
+        det_lo_in = np.stack([np.broadcast_to(d.lo, (n,)) for d in dets])
+        det_hi_in = np.stack([np.broadcast_to(d.hi, (n,)) for d in dets])
+        det_row = np.arange(n_post, dtype=np.int64)
+    else:
+        assert pose_det is not None
+        det_lo_in = np.broadcast_to(pose_det.lo, (n,))[None, :].astype(np.float64)
+        det_hi_in = np.broadcast_to(pose_det.hi, (n,))[None, :].astype(np.float64)
+        det_row = np.zeros(n_post, dtype=np.int64)
+    status = np.empty((n, n_post), dtype=np.uint8)
+    sign = np.empty((n, n_post), dtype=np.int8)
+    exists = np.empty((n, n_post), dtype=bool)
+    within = np.empty((n, n_post), dtype=bool)
+    group = np.empty((n, n_post), dtype=bool)
+    det_lo = np.empty((n, n_post))
+    det_hi = np.empty((n, n_post))
+    angles_lo = np.empty((n, n_post, len(legs)))
+    angles_hi = np.empty((n, n_post, len(legs)))
+    no_sign = np.zeros((1, n), dtype=bool)
+    posture_rows(
+        np.ascontiguousarray(postures, dtype=np.int64), codes, ang_lo, ang_hi,
+        det_lo_in, det_hi_in, det_row,
+        np.stack(beyond_rows).astype(np.uint8) if beyond_rows else np.zeros((1, n), np.uint8),
+        beyond_row,
+        np.stack([s[0] for s in sign_rows]) if sign_rows else no_sign,
+        np.stack([s[1] for s in sign_rows]) if sign_rows else no_sign,
+        signs_row, any_out, any_fold, fold_ok,
+        status, sign, exists, within, group, det_lo, det_hi, angles_lo, angles_hi,
+    )  # fmt: skip
     return SheetTable(
         leg_status=leg_status,
         status=status,

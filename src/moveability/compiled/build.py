@@ -212,6 +212,15 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
             array(I8, 2), array(B1, 2), array(B1, 2), F8, array(I8, 2), array("int8", 2),
         )
     ],
+    "moveability.analysis._sheet_kernels.posture_rows": [
+        (
+            array(I8, 2), array("uint8", 3), array(F8, 3), array(F8, 3), R2, R2, array(I8),
+            array("uint8", 2), array(I8), array(B1, 2), array(B1, 2), array(I8), array(B1),
+            array(B1), array(B1), array("uint8", 2, out=True), array("int8", 2, out=True),
+            array(B1, 2, out=True), array(B1, 2, out=True), array(B1, 2, out=True), W2, W2,
+            array(F8, 3, out=True), array(F8, 3, out=True),
+        )
+    ],
     "moveability.hypertree._kernels.mark_sources": [
         (array(I8, 2), array(I8), array(B1, out=True))
     ],
