@@ -227,7 +227,9 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
         with np.errstate(invalid="ignore"):
             dets = mechanism.det_a_postures(lo, hi, branch_angles)
 
-    # the constraints beyond the paper, posture by posture (mechanism-specific)
+    # the constraints beyond the paper (passive limits, obstacles, collisions: part
+    # of what a valid configuration is; and a sign of det A whose every
+    # configuration violates one), posture by posture as the mechanism checks them
     beyond_rows: list[Any] = []
     sign_rows: list[Any] = []
     beyond_row = np.full(n_post, -1, dtype=np.int64)
@@ -246,7 +248,7 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
             beyond_rows.append(np.broadcast_to(beyond, (n,)))
         if signs is not None:
             signs_row[p] = len(sign_rows)
-            sign_rows.append(signs)
+            sign_rows.append([np.broadcast_to(np.asarray(v, dtype=bool), (n,)) for v in signs])
     # then every posture's row of the table in one pass over the boxes
     n_branch = max(len(r.branches) for r in reaches) if legs else 0
     codes = np.zeros((len(legs), n_branch, n), dtype=np.uint8)
