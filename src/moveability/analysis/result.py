@@ -846,19 +846,19 @@ class _NeckSearches:
 
     def __init__(self, n: int) -> None:
         self._n = n
-        #: per batch: its leaves, then (gap, source, group) and its parts' count
-        self._taken: list[NDArray[np.bool_]] = []
+        #: per batch: (gap, source, group; a leaf of none has group -1), and the
+        #: counts of its parts and of its groups
         self.batches: list[tuple[NDArray[np.bool_], NDArray[np.int64], NDArray[np.int64]]] = []
-        self._parts: list[int] = []
+        self._counts: list[list[int]] = []
 
     def add(self, gap: NDArray[np.bool_], source: NDArray[np.int64], n_parts: int) -> None:
         """One search: its gap leaves and the part (0 to ``n_parts - 1``) of each
         leaf holding one, -1 elsewhere."""
         through = gap | (source >= 0)
-        b = next((b for b, t in enumerate(self._taken) if not (t & through).any()), None)
+        free = (b for b, batch in enumerate(self.batches) if not (through & (batch[2] >= 0)).any())
+        b = next(free, None)
         if b is None:
             b = len(self.batches)
-            self._taken.append(np.zeros(self._n, dtype=bool))
             self.batches.append(
                 (
                     np.zeros(self._n, dtype=bool),
@@ -866,15 +866,16 @@ class _NeckSearches:
                     np.full(self._n, -1, dtype=np.int64),
                 )
             )
-            self._parts.append(0)
+            self._counts.append([0, 0])
         b_gap, b_source, b_group = self.batches[b]
-        self._taken[b] |= through
+        counts = self._counts[b]
         b_gap |= gap
         held = source >= 0
-        # the parts of each search numbered apart
-        b_source[held] = source[held] + self._parts[b]
-        self._parts[b] += n_parts
-        b_group[through] = int(b_group.max(initial=-1)) + 1
+        # the parts of each search numbered apart, and each search its own group
+        b_source[held] = source[held] + counts[0]
+        b_group[through] = counts[1]
+        counts[0] += n_parts
+        counts[1] += 1
 
 
 def count_text(at_least: int, at_most: int | None, noun: str = "region") -> str:
