@@ -81,6 +81,30 @@ def test_reach_is_sound(a, b):
     assert not reach.fold_connected[~fold].any()
 
 
+@pytest.mark.parametrize(("a", "b", "margin"), [(8.0, 5.0, 0.01), (5.0, 8.0, 0.01), (6.0, 6.0, 0.1)])
+def test_reach_decides_boxes_clear_of_the_folds(a, b, margin):
+    """Boxes farther than ``margin`` from both folds (the circles of radii
+    ``|a - b|`` and ``a + b`` about the base) are decided: REACH_OUT beyond them,
+    REGULAR between them. A box just beyond the reach keeps a run where ``F``'s
+    enclosures over wide monotone pieces hold 0; ``F`` at the run's ends shows
+    it holds no root."""
+    rng = np.random.default_rng(2)
+    n = 8000
+    half = rng.uniform(0.001, 0.1, (n, 1)) * np.ones((1, 2))
+    r = rng.uniform(0.0, a + b + 2.0, n)
+    theta = rng.uniform(-np.pi, np.pi, n)
+    centre = np.stack([r * np.cos(theta), r * np.sin(theta)], axis=1)
+    lo, hi = centre - half, centre + half
+    status = five_bar_leg(a, b).reach(lo, hi).status
+    near = np.hypot(np.clip(0.0, lo[:, 0], hi[:, 0]), np.clip(0.0, lo[:, 1], hi[:, 1]))
+    far = np.hypot(np.maximum(-lo[:, 0], hi[:, 0]), np.maximum(-lo[:, 1], hi[:, 1]))
+    out = (near > a + b + margin) | (far < abs(a - b) - margin)
+    inside = (near > abs(a - b) + margin) & (far < a + b - margin)
+    assert out.sum() > 500 and inside.sum() > 2000
+    assert (status[out] == REACH_OUT).all()
+    assert (status[inside] == REGULAR).all()
+
+
 def test_fold_connected_boxes_hold_both_sides_and_a_fold_path():
     rng = np.random.default_rng(2)
     leg, ref = five_bar_leg(), RRLeg((0.0, 0.0), A, B, "t1")

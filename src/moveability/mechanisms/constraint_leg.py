@@ -17,17 +17,19 @@ widened by a quarter of its length on both sides for a prismatic one) is cut
 into pieces; pieces where the enclosure of ``F`` excludes 0 are dropped, and
 pieces where ``dF/dq`` has no definite sign are bisected (to a depth). The
 remaining pieces form *runs* of adjacent pieces (on the circle for a revolute
-joint). A run is certified to hold exactly one root for every pose of the box
-when ``F`` is finite and ``dF/dq`` has one definite sign on every piece, and
-``F`` has definite opposite signs at the run's two ends (by continuity and
-monotonicity). Then each root's enclosure is contracted by bisection on
+joint). Where ``F`` is finite and ``dF/dq`` has one definite sign on every
+piece of a run, ``F`` is monotone in ``q`` over the run for every pose of the
+box. Such a run holds no root when ``F`` at its two ends shows no change of
+sign (its start on the side of the sign of ``dF/dq``, or its end on the
+other), and is dropped; it is certified to hold exactly one root for every
+pose when ``F`` has definite opposite signs at its two ends. Then each root's enclosure is contracted by bisection on
 ``F``'s sign at points of the run. Over the box the leg is
 
 ``REGULAR``
     two runs, one certified root of each sign: every pose has exactly these
     two configurations in the search range;
 ``REACH_OUT``
-    no piece can hold a root;
+    no run can hold a root;
 ``FOLD_OUTER`` (``FOLD_INNER``)
     one run ``Q``; ``F`` is convex (concave) in ``q`` over box x ``Q`` and
     positive (negative) at both ends of ``Q``, so every pose has two roots in
@@ -119,6 +121,17 @@ class _Runs:
     end: Interval  # last q of the run (an enclosure, when unwrapped past the circle's cut)
     mono: NDArray[np.int8]  # certified sign of dF/dq over the run, 0 if none
     finite: NDArray[np.bool_]
+
+    def take(self, keep: NDArray[np.intp]) -> _Runs:
+        """The runs ``keep`` (increasing indices) and their pieces alone."""
+        index = np.full(self.box.size, -1, dtype=np.intp)
+        index[keep] = np.arange(keep.size)
+        of_piece = index[self.run_of_piece]
+        held = of_piece >= 0
+        return _Runs(
+            self.pieces.take(held), of_piece[held], self.box[keep], self.start[keep],
+            self.end[keep], self.mono[keep], self.finite[keep],
+        )  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)
@@ -566,16 +579,36 @@ class ConstraintLeg:
         with tape.remembered_boxes():
             return self._reach(lo, hi)
 
+    def _root_runs(self, lo: Array, hi: Array) -> tuple[_Runs, Interval, Interval]:
+        """The runs over boxes ``[lo, hi]`` that may hold a root, with ``F`` at their
+        two ends over each box.
+
+        Over a run where dF/dq has a certified sign (and F is finite), F is
+        monotone in q for every pose of the box: F of that sign's side at the
+        run's start, or of the other side at its end, keeps F off 0 over the
+        whole run. Such runs hold no root and are dropped: a box just beyond a
+        leg's reach, whose enclosures of F over pieces of the range still hold 0,
+        is then out, and one with two roots besides is regular."""
+        runs = self._runs(self._isolate(lo, hi), lo.shape[0])
+        f_start = self._box_eval(self.f, lo, hi, runs.box, ex.points(runs.start))
+        f_end = self._box_eval(self.f, lo, hi, runs.box, runs.end)
+        up, down = runs.mono > 0, runs.mono < 0
+        free = runs.finite & (
+            (up & ((f_start.lo > 0) | (f_end.hi < 0)))
+            | (down & ((f_start.hi < 0) | (f_end.lo > 0)))
+        )
+        if free.any():
+            keep = np.flatnonzero(~free)
+            runs, f_start, f_end = runs.take(keep), f_start[keep], f_end[keep]
+        return runs, f_start, f_end
+
     def _reach(self, lo: Array, hi: Array) -> LegReach:
         n = lo.shape[0]
-        pieces = self._isolate(lo, hi)
-        runs = self._runs(pieces, n)
+        runs, f_start, f_end = self._root_runs(lo, hi)
         n_runs = np.bincount(runs.box, minlength=n)
 
         # certified runs: F of definite opposite signs at the two ends
         s = runs.mono.astype(np.float64)
-        f_start = self._box_eval(self.f, lo, hi, runs.box, ex.points(runs.start))
-        f_end = self._box_eval(self.f, lo, hi, runs.box, runs.end)
         cert = (runs.mono != 0) & runs.finite
         cert &= np.where(
             s > 0, (f_start.hi < 0) & (f_end.lo > 0), (f_start.lo > 0) & (f_end.hi < 0)
@@ -955,8 +988,8 @@ class ConstraintLeg:
 
     def _fold_axis(self, lo: Array, hi: Array) -> tuple[int, int, float, float, float]:
         """Axis, direction in which G grows, convexity and Q of one fold-connected box."""
-        pieces = self._isolate(lo, hi)
-        runs = self._runs(pieces, 1)
+        runs = self._root_runs(lo, hi)[0]
+        pieces = runs.pieces
         q = Interval(pieces.lo, pieces.hi)
         box = np.zeros(pieces.box.size, dtype=np.intp)
         d2 = self._box_eval(self.d2f_dq2, lo, hi, box, q)
