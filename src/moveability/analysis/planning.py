@@ -93,6 +93,20 @@ def _touching(
     return shift
 
 
+def _reachable_pose(analysis: Analysis, lo: Array, hi: Array) -> Array:
+    """A pose of the common boundary ``[lo, hi]`` of two fold leaves that every leg
+    reaches: its middle, else the first corner that is (their contact is certified
+    to hold reachable poses: a fold certificate's reachable corner)."""
+    k = lo.size
+    corners = np.where((np.arange(1 << k)[:, None] >> np.arange(k)) & 1, hi, lo)
+    candidates = np.vstack([0.5 * (lo + hi)[None, :], corners])
+    q = analysis.mechanism.joint_angles(candidates, clip=False)
+    reached = np.isfinite(q.reshape(candidates.shape[0], -1)).all(axis=1)
+    if not reached.any():
+        raise PlanningError("no reachable pose found where two fold leaves touch")
+    return np.asarray(candidates[int(np.argmax(reached))])
+
+
 class _Fold:
     """How a motion crosses a leaf where one leg's branches meet (a certified fold).
 
@@ -175,6 +189,9 @@ def _waypoints(
         shift = _touching(analysis, leaves, lo_u, hi_u, lv, offset)
         lo_v, hi_v = leaves.lo[lv] + shift, leaves.hi[lv] + shift
         shared = 0.5 * (np.maximum(lo_u, lo_v) + np.minimum(hi_u, hi_v))
+        if here is not None and t.folding[lv].any():
+            # between two fold leaves the middle may be beyond the reach
+            shared = _reachable_pose(analysis, np.maximum(lo_u, lo_v), np.minimum(hi_u, hi_v))
         if here is not None:
             out += [(pose, pu) for pose in here.through(current, shared)]
         out.append((shared, pu))

@@ -22,8 +22,9 @@ piece of a run, ``F`` is monotone in ``q`` over the run for every pose of the
 box. Such a run holds no root when ``F`` at its two ends shows no change of
 sign (its start on the side of the sign of ``dF/dq``, or its end on the
 other), and is dropped; it is certified to hold exactly one root for every
-pose when ``F`` has definite opposite signs at its two ends. Then each root's enclosure is contracted by bisection on
-``F``'s sign at points of the run. Over the box the leg is
+pose when ``F`` has definite opposite signs at its two ends. Then each
+root's enclosure is contracted by bisection on ``F``'s sign at points of the
+run. Over the box the leg is
 
 ``REGULAR``
     two runs, one certified root of each sign: every pose has exactly these
@@ -52,7 +53,7 @@ Fold connectivity
 ``G = F`` for a convex fold and ``G = -F`` for a concave one, some pose axis
 ``j`` has ``dG/dX_j`` of a definite sign on B x Q (say > 0), and the face of
 B at the low end of axis ``j`` is certainly reachable (``G(face, q*) < 0``
-for one point ``q*`` of Q). Proof: outside Q the pieces exclude roots and
+for one point ``q*`` of Q). Proof: outside Q no piece holds a root and
 ``G > 0`` at Q's ends, so ``G > 0`` off Q and the reachable poses of B are
 ``{X : m(X) <= 0}`` with ``m(X) = min_Q G(X, .)``. Since ``G`` increases with
 ``X_j`` at every ``q`` of Q, so does ``m``: the reachable set is a union of
@@ -60,8 +61,9 @@ segments along axis ``j`` starting on the reachable face, hence
 path-connected (the face is convex). The two roots in Q are continuous on
 that set (``G`` strictly convex) and meet where ``m = 0``; a pose certified
 unreachable exists in B, so the segment through it ends at such a fold pose.
-Every configuration thus joins the fold by moving along axis ``j`` and the
-two branches' configurations over B form one connected set.
+Every configuration thus joins the fold: along axis ``j`` onto the reachable
+face, across it, and along axis ``j`` again on that segment; the two
+branches' configurations over B form one connected set.
 :meth:`ConstraintLeg.fold_path` returns that motion.
 """
 
@@ -86,6 +88,9 @@ __all__ = ["ConstraintLeg"]
 #: ``f(x_1, ..., x_k, q)`` on arrays or Intervals
 Function = Callable[..., Any]
 
+#: cuts of a monotone piece of a fold run, halving towards the fold (see
+#: ``ConstraintLeg._fold_pieces``)
+_FOLD_CUTS = 6
 _TWO_PI = Interval(np.nextafter(2 * np.pi, 0.0), np.nextafter(2 * np.pi, np.inf))
 _INF = np.inf
 
@@ -579,6 +584,30 @@ class ConstraintLeg:
         with tape.remembered_boxes():
             return self._reach(lo, hi)
 
+    def _root_pieces(self, lo: Array, hi: Array) -> _Pieces:
+        """The pieces of :meth:`_isolate`, less those over which ``F`` is monotone
+        in ``q`` (finite, ``dF/dq`` of a certified sign) and of one sign at both
+        ends, for every pose of the box: they hold no root. Near a fold, the wide
+        monotone pieces at the ends of the run go, and the run is the part of the
+        range about the fold."""
+        pieces = self._isolate(lo, hi)
+        mono = np.flatnonzero((pieces.mono != 0) & pieces.finite)
+        if not mono.size:
+            return pieces
+        box = pieces.box[mono]
+        at_lo = self._box_eval(self.f, lo, hi, box, ex.points(pieces.lo[mono]))
+        at_hi = self._box_eval(self.f, lo, hi, box, ex.points(pieces.hi[mono]))
+        free = np.where(
+            pieces.mono[mono] > 0,
+            (at_lo.lo > 0) | (at_hi.hi < 0),
+            (at_lo.hi < 0) | (at_hi.lo > 0),
+        )
+        if not free.any():
+            return pieces
+        keep = np.ones(pieces.box.size, dtype=bool)
+        keep[mono[free]] = False
+        return pieces.take(keep)
+
     def _root_runs(self, lo: Array, hi: Array) -> tuple[_Runs, Interval, Interval]:
         """The runs over boxes ``[lo, hi]`` that may hold a root, with ``F`` at their
         two ends over each box.
@@ -589,7 +618,7 @@ class ConstraintLeg:
         whole run. Such runs hold no root and are dropped: a box just beyond a
         leg's reach, whose enclosures of F over pieces of the range still hold 0,
         is then out, and one with two roots besides is regular."""
-        runs = self._runs(self._isolate(lo, hi), lo.shape[0])
+        runs = self._runs(self._root_pieces(lo, hi), lo.shape[0])
         f_start = self._box_eval(self.f, lo, hi, runs.box, ex.points(runs.start))
         f_end = self._box_eval(self.f, lo, hi, runs.box, runs.end)
         up, down = runs.mono > 0, runs.mono < 0
@@ -762,8 +791,7 @@ class ConstraintLeg:
         found = self._fold_pieces(lo, hi, runs, boxes, r, ends)
         if found is None:
             return np.zeros(boxes.size, dtype=np.int8), np.zeros(boxes.size, dtype=bool)
-        may_convex, may_concave, p_idx, local = found
-        pc = runs.pieces
+        may_convex, may_concave, p_local, q, finite = found
         prog, fprog, split = progs
         b_lo, b_hi = tape.pose_box_values(prog, lo, hi)
         return fold(
@@ -774,9 +802,9 @@ class ConstraintLeg:
             hi[boxes],
             (b_lo[:, boxes], b_hi[:, boxes]),
             may_convex.astype(np.int64) + 2 * may_concave.astype(np.int64),
-            local[runs.run_of_piece[p_idx]],
-            Interval(pc.lo[p_idx], pc.hi[p_idx]),
-            pc.finite[p_idx],
+            p_local,
+            q,
+            finite,
         )
 
     def _fold_pieces(
@@ -787,11 +815,20 @@ class ConstraintLeg:
         boxes: NDArray[np.intp],
         r: NDArray[np.intp],
         ends: tuple[Interval, Interval] | None,
-    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.intp], NDArray[np.intp]] | None:
+    ) -> (
+        tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.intp], Interval, NDArray[np.bool_]]
+        | None
+    ):
         """The first step of the fold certificates of boxes with one run ``r``: ``F``
         positive (may be convex) or negative (concave) at both ends of each box's run
-        (``ends``: ``F`` there, when known), the pieces of the runs that may pass
-        (no certificate else) and each run's box index; None if no box may pass."""
+        (``ends``: ``F`` there, when known), and the pieces of the runs that may pass
+        (no certificate else): each one's box index, joint enclosure and whether
+        ``F`` is finite there. None if no box may pass.
+
+        A piece where ``F`` is monotone is cut in ``_FOLD_CUTS + 1`` pieces halving
+        towards the fold (the end where ``F`` falls, for a convex run, or rises):
+        a wide piece next to the fold then no longer hides that a pose beyond the
+        fold is certainly unreachable. The pieces cover the same joint range."""
         # G = s2 F positive at both ends of Q: F of one definite sign at both ends
         if ends is None:
             ends = (
@@ -803,11 +840,38 @@ class ConstraintLeg:
         may_concave = (f_start.hi < 0) & (f_end.hi < 0)
         if not (may_convex | may_concave).any():
             return None
-        sel = np.isin(runs.run_of_piece, r[may_convex | may_concave])
-        p_idx = np.flatnonzero(sel)
+        pc = runs.pieces
+        p_idx = np.flatnonzero(np.isin(runs.run_of_piece, r[may_convex | may_concave]))
         local = np.full(runs.box.size, -1, dtype=np.intp)
         local[r] = np.arange(boxes.size)
-        return may_convex, may_concave, p_idx, local
+        p_local = local[runs.run_of_piece[p_idx]]
+        a, b, mono = pc.lo[p_idx], pc.hi[p_idx], pc.mono[p_idx]
+        # the fold at the high end: F falls towards a minimum, or rises towards a maximum
+        toward_hi = np.where(may_convex[p_local], mono < 0, mono > 0)
+        parts = np.where(mono != 0, _FOLD_CUTS + 1, 1)
+        own = np.repeat(np.arange(p_idx.size), parts)
+        # each cut piece's place from its fold end (0: at the fold)
+        place = np.arange(own.size) - np.repeat(np.cumsum(parts) - parts, parts)
+        width = (b - a)[own]
+        near = np.where(place == 0, 0.0, 2.0 ** (place - 1 - _FOLD_CUTS))
+        far = np.where(place == parts[own] - 1, 1.0, 2.0 ** (place - _FOLD_CUTS))
+        up = toward_hi[own]
+        with _quiet():
+            q_lo = np.where(up, b[own] - far * width, a[own] + near * width)
+            q_hi = np.where(up, b[own] - near * width, a[own] + far * width)
+        # the piece's own ends exactly; the cuts within it
+        start, stop = a[own], b[own]
+        q_lo = np.where(np.where(up, far == 1.0, near == 0.0), start, np.clip(q_lo, start, stop))
+        q_hi = np.where(np.where(up, near == 0.0, far == 1.0), stop, np.clip(q_hi, start, stop))
+        # increasing q within each piece: the pieces cut towards the high end reversed
+        order = np.lexsort((q_lo, own))
+        return (
+            may_convex,
+            may_concave,
+            p_local[own][order],
+            Interval(q_lo[order], q_hi[order]),
+            pc.finite[p_idx][own][order],
+        )
 
     def _fold_interpreted(
         self, lo: Array, hi: Array, runs: _Runs, boxes: NDArray[np.intp], r: NDArray[np.intp]
@@ -815,15 +879,11 @@ class ConstraintLeg:
         """Fold certificates of boxes with one run ``r``: convexity sign (0: none), connected."""
         k = lo.shape[1]
         n_b = boxes.size
-        pc = runs.pieces
         found = self._fold_pieces(lo, hi, runs, boxes, r, None)
         if found is None:
             return np.zeros(n_b, dtype=np.int8), np.zeros(n_b, dtype=bool)
-        may_convex, may_concave, p_idx, local = found
-        p_local = local[runs.run_of_piece[p_idx]]
-        p_box = pc.box[p_idx]
-        q = Interval(pc.lo[p_idx], pc.hi[p_idx])
-        finite = pc.finite[p_idx]
+        may_convex, may_concave, p_local, q, finite = found
+        p_box = boxes[p_local]
         d2 = self._box_eval(self.d2f_dq2, lo, hi, p_box, q)
         d1 = self._box_eval(self.df_dq, lo, hi, p_box, q)
         d1_ok = np.isfinite(d1.lo) & np.isfinite(d1.hi)
@@ -925,11 +985,14 @@ class ConstraintLeg:
         )
 
     def fold_path(self, lo: Array, hi: Array, pose: Array) -> Array:
-        """Poses from ``pose`` to a fold pose of a ``fold_connected`` box, shape (2, k).
+        """Poses from ``pose`` to a fold pose of a ``fold_connected`` box, shape (m, k).
 
-        The motion is the straight segment along the certified axis ``j`` (see the
-        module's notes): every pose on it is reachable, and at its end the two
-        branches meet (within rounding: the last pose found reachable).
+        The motion of the module's notes, in straight segments: along the
+        certified axis ``j`` onto the box's reachable face (``G`` falls, the
+        pose stays reachable), across that face (convex, every pose reachable)
+        to below a corner beyond the reach, and along axis ``j`` towards that
+        corner until the two branches meet (within rounding: the last pose found
+        reachable). Every pose on it is reachable.
 
         Raises
         ------
@@ -957,20 +1020,24 @@ class ConstraintLeg:
 
         if m(x0[None, :])[0] > 0:
             raise ValueError(f"leg {self.joint}: the pose is not reachable")
-        far = x0.copy()
-        far[axis] = hi[0, axis] if direction > 0 else lo[0, axis]
+        k = x0.size
+        corners = np.where((np.arange(1 << k)[:, None] >> np.arange(k)) & 1, hi, lo)
+        beyond = corners[int(np.argmax(m(corners)))]
+        face = lo[0, axis] if direction > 0 else hi[0, axis]
+        anchor, below = x0.copy(), beyond.copy()
+        anchor[axis] = below[axis] = face
         t_in, t_out = 0.0, 1.0
-        if m(far[None, :])[0] <= 0:
+        if m(beyond[None, :])[0] <= 0:  # pragma: no cover - a corner is certified beyond
             t_in = 1.0
         for _ in range(55):
             if t_in == 1.0:
                 break
             t = 0.5 * (t_in + t_out)
-            if m((x0 + t * (far - x0))[None, :])[0] <= 0:
+            if m((below + t * (beyond - below))[None, :])[0] <= 0:
                 t_in = t
             else:
                 t_out = t
-        return np.stack([x0, x0 + t_in * (far - x0)])
+        return np.stack([x0, anchor, below, below + t_in * (beyond - below)])
 
     def fold_anchor(self, lo: Array, hi: Array, pose: Array) -> Array:
         """``pose`` moved along the certified axis onto the box's reachable face.
