@@ -109,6 +109,31 @@ def test_reach_decides_boxes_clear_of_the_folds(a, b, margin):
     assert (status[inside] == REGULAR).all()
 
 
+@pytest.mark.parametrize(("a", "b"), [(8.0, 5.0), (5.0, 8.0), (6.0, 6.0), (8.0, 7.99)])
+def test_fold_boxes_hold_a_corner_on_each_side_of_the_reach(a, b):
+    """A fold certificate says one corner of the box is reachable and another is
+    beyond the reach (over a monotone piece the latter is tested at the piece's
+    ends): both are checked against the closed form, on boxes about the two
+    folds, of every size down to a ten-thousandth."""
+    rng = np.random.default_rng(4)
+    leg, ref = five_bar_leg(a, b), RRLeg((0.0, 0.0), a, b, "t1")
+    n = 3000
+    theta = rng.uniform(-np.pi, np.pi, n)
+    radius = np.where(rng.uniform(size=n) < 0.5, a + b, abs(a - b)) + rng.uniform(-0.1, 0.1, n)
+    centre = np.stack([radius * np.cos(theta), radius * np.sin(theta)], axis=1)
+    half = 10.0 ** rng.uniform(-4, -0.5, (n, 1)) * np.ones((1, 2))
+    lo, hi = centre - half, centre + half
+    status = leg.reach(lo, hi).status
+    fold = np.flatnonzero((status == FOLD_OUTER) | (status == FOLD_INNER))
+    assert fold.size > 300
+    corners = np.stack(
+        [np.where([(c >> j) & 1 for j in range(2)], hi[fold], lo[fold]) for c in range(4)], axis=1
+    )
+    reached = np.isfinite(ref.angles(corners.reshape(-1, 2))).all(axis=1).reshape(-1, 4)
+    assert reached.any(axis=1).all()
+    assert (~reached).any(axis=1).all()
+
+
 def test_fold_connected_boxes_hold_both_sides_and_a_fold_path():
     rng = np.random.default_rng(2)
     leg, ref = five_bar_leg(), RRLeg((0.0, 0.0), A, B, "t1")

@@ -266,7 +266,7 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
             array(I8, 2), R1, R1, I8, I8, array(I8), I8, uniform(8, array(I8, 2)),
             uniform(4, array(I8)), R1, I8, I8, I8, R2, R2, array(I8), array(I8), R1, R1, R1,
             array(B1), R2, R2, R2, R2, R2, R2, array(F8, 3), array(F8, 3), array(F8, 3),
-            array(F8, 3), array(F8, 3), array(F8, 3),
+            array(F8, 3), array(F8, 3), array(F8, 3), array(I8), R1, R1, R2, R2,
         )
     ],
     "moveability.mechanisms.tape._pose_ops": [

@@ -29,7 +29,7 @@ from . import expressions as ex
 from . import tape as tp
 from .tape import PIECE_BLOCK, run_ops
 
-__all__ = ["float_program", "fold"]
+__all__ = ["float_program", "fold", "unreachable_tests"]
 
 
 @kernel
@@ -304,13 +304,20 @@ def _fold(
     fd_hi: Array,
     fq: Array,
     fc: Array,
+    u_local: NDArray[np.int64],
+    u_lo: Array,
+    u_hi: Array,
+    ud_lo: Array,
+    ud_hi: Array,
 ) -> tuple[NDArray[np.int8], NDArray[np.bool_]]:  # pragma: no cover - compiled
     """The fold certificates of the boxes ``[lo[i], hi[i]]`` (see :func:`fold`).
 
     ``codes`` holds, for ``F``, ``(dF/dq, d2F/dq2)``, the ``dF/dX_j`` and ``F``'s
     float tape in turn, the operations on the pose alone and the others, ``needs``
     the slots of the former the latter read: the former are evaluated once per
-    pose (box, corner or face), the others per piece (:func:`splits`)."""
+    pose (box, corner or face), the others per piece (:func:`splits`). ``u_*``
+    are the joint enclosures of the test that a corner is beyond the reach
+    (box, bounds, derived inputs; :func:`unreachable_tests`)."""
     f_pose, f_rest, f_need = codes[0], codes[1], needs[0]
     d_pose, d_rest, d_need = codes[2], codes[3], needs[1]
     x_pose, x_rest, x_need = codes[4], codes[5], needs[2]
@@ -490,13 +497,13 @@ def _fold(
     )  # fmt: skip
     out = np.ones(n_b, dtype=np.bool_)
     t = 0
-    while t < n_p:
+    while t < u_local.size:
         c, t = _pieces(
-            f_rest, r_lo, r_hi, t, p_local, ok, f_need, pv_lo, pv_hi, k, q_lo, q_hi,
-            qd_lo, qd_hi, cols,
+            f_rest, r_lo, r_hi, t, u_local, ok, f_need, pv_lo, pv_hi, k, u_lo, u_hi,
+            ud_lo, ud_hi, cols,
         )  # fmt: skip
         for e in range(c):
-            i = p_local[cols[e]]
+            i = u_local[cols[e]]
             g_lo = r_lo[out_f, e] if s2[i] > 0 else -r_hi[out_f, e]
             if not g_lo > 0.0:
                 out[i] = False
@@ -628,6 +635,31 @@ def _float_values(functions: Any, values: list[Array], out: Array) -> None:
             out[e] = function(*(values[a] for a in args))
 
 
+def unreachable_tests(
+    mono: NDArray[np.int8], q_lo: Array, q_hi: Array
+) -> tuple[NDArray[np.intp], Array, Array]:
+    """The joint enclosures over which a fold certificate tests that a pose is
+    beyond the reach: each piece, or its two ends (points) where ``F`` is monotone
+    in ``q`` there. Returns each one's piece and its bounds, in piece order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> at, lo, hi = unreachable_tests(np.array([0, 1], dtype=np.int8),
+    ...                                np.array([0.0, 1.0]), np.array([1.0, 2.0]))
+    >>> at.tolist(), lo.tolist(), hi.tolist()
+    ([0, 1, 1], [0.0, 1.0, 2.0], [1.0, 1.0, 2.0])
+    """
+    ends = mono != 0
+    at = np.repeat(np.arange(mono.size), np.where(ends, 2, 1))
+    second = np.zeros(at.size, dtype=bool)
+    second[1:] = at[1:] == at[:-1]
+    first = ends[at] & ~second
+    lo = np.where(second, q_hi[at], q_lo[at])
+    hi = np.where(first, q_lo[at], q_hi[at])
+    return at, lo, hi
+
+
 def fold(
     prog: tp.Program,
     fprog: tp.Program,
@@ -639,6 +671,7 @@ def fold(
     p_local: NDArray[np.int64],
     q: Interval,
     finite: NDArray[np.bool_],
+    mono: NDArray[np.int8],
 ) -> tuple[NDArray[np.int8], NDArray[np.bool_]]:
     """The fold certificates of ``ConstraintLeg._fold_interpreted`` in one kernel.
 
@@ -649,7 +682,8 @@ def fold(
     derived inputs of the pose over them, as
     :func:`~moveability.mechanisms.tape.pose_values` gives them) and their pieces
     (joint enclosures ``q``, box ``p_local``, in box order, ``F`` finite there or
-    not): ``ends[i]`` says whether ``F > 0`` (bit 1) or ``F < 0`` (bit 2) at both
+    not; ``mono`` the sign of ``dF/dq`` certified there, 0 for none):
+    ``ends[i]`` says whether ``F > 0`` (bit 1) or ``F < 0`` (bit 2) at both
     ends of box ``i``'s run. Returns the convexity sign (0: no certificate) and
     the fold connectivity of each box.
     """
@@ -680,6 +714,10 @@ def fold(
     for c, p in enumerate(corners):
         _float_values(fprog.pose_derived, list(p.T), fc[c])
 
+    # the test that a corner is beyond the reach: over each piece, or at its ends
+    u_at, u_lo, u_hi = unreachable_tests(mono, q.lo, q.hi)
+    ud = tp.derived_values(prog, Interval(u_lo, u_hi))
+
     def c3(parts: list[tuple[Array, Array]], which: int, d: int) -> Array:
         out = np.stack([p[which] for p in parts]) if parts else np.empty((0, d, n_b))
         return np.ascontiguousarray(out, dtype=np.float64)
@@ -698,5 +736,6 @@ def fold(
         np.ascontiguousarray(box_pose[1], dtype=np.float64),
         c3(cd, 0, d_pose), c3(cd, 1, d_pose), c3(fd, 0, d_pose), c3(fd, 1, d_pose),
         fq, fc,
+        np.ascontiguousarray(p_local, dtype=np.int64)[u_at], u_lo, u_hi, ud[0], ud[1],
     )  # fmt: skip
     return convexity, connected

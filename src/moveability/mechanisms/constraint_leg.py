@@ -88,9 +88,6 @@ __all__ = ["ConstraintLeg"]
 #: ``f(x_1, ..., x_k, q)`` on arrays or Intervals
 Function = Callable[..., Any]
 
-#: cuts of a monotone piece of a fold run, halving towards the fold (see
-#: ``ConstraintLeg._fold_pieces``)
-_FOLD_CUTS = 6
 _TWO_PI = Interval(np.nextafter(2 * np.pi, 0.0), np.nextafter(2 * np.pi, np.inf))
 _INF = np.inf
 
@@ -791,7 +788,7 @@ class ConstraintLeg:
         found = self._fold_pieces(lo, hi, runs, boxes, r, ends)
         if found is None:
             return np.zeros(boxes.size, dtype=np.int8), np.zeros(boxes.size, dtype=bool)
-        may_convex, may_concave, p_local, q, finite = found
+        may_convex, may_concave, p_local, q, finite, mono = found
         prog, fprog, split = progs
         b_lo, b_hi = tape.pose_box_values(prog, lo, hi)
         return fold(
@@ -805,6 +802,7 @@ class ConstraintLeg:
             p_local,
             q,
             finite,
+            mono,
         )
 
     def _fold_pieces(
@@ -816,19 +814,18 @@ class ConstraintLeg:
         r: NDArray[np.intp],
         ends: tuple[Interval, Interval] | None,
     ) -> (
-        tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.intp], Interval, NDArray[np.bool_]]
+        tuple[
+            NDArray[np.bool_], NDArray[np.bool_], NDArray[np.intp], Interval,
+            NDArray[np.bool_], NDArray[np.int8],
+        ]
         | None
-    ):
+    ):  # fmt: skip
         """The first step of the fold certificates of boxes with one run ``r``: ``F``
         positive (may be convex) or negative (concave) at both ends of each box's run
         (``ends``: ``F`` there, when known), and the pieces of the runs that may pass
-        (no certificate else): each one's box index, joint enclosure and whether
-        ``F`` is finite there. None if no box may pass.
-
-        A piece where ``F`` is monotone is cut in ``_FOLD_CUTS + 1`` pieces halving
-        towards the fold (the end where ``F`` falls, for a convex run, or rises):
-        a wide piece next to the fold then no longer hides that a pose beyond the
-        fold is certainly unreachable. The pieces cover the same joint range."""
+        (no certificate else): each one's box index, joint enclosure, whether ``F``
+        is finite there and the sign of ``dF/dq`` certified there (0: none). None
+        if no box may pass."""
         # G = s2 F positive at both ends of Q: F of one definite sign at both ends
         if ends is None:
             ends = (
@@ -841,36 +838,18 @@ class ConstraintLeg:
         if not (may_convex | may_concave).any():
             return None
         pc = runs.pieces
-        p_idx = np.flatnonzero(np.isin(runs.run_of_piece, r[may_convex | may_concave]))
+        candidate = np.zeros(runs.box.size, dtype=bool)
+        candidate[r[may_convex | may_concave]] = True
+        p_idx = np.flatnonzero(candidate[runs.run_of_piece])
         local = np.full(runs.box.size, -1, dtype=np.intp)
         local[r] = np.arange(boxes.size)
-        p_local = local[runs.run_of_piece[p_idx]]
-        a, b, mono = pc.lo[p_idx], pc.hi[p_idx], pc.mono[p_idx]
-        # the fold at the high end: F falls towards a minimum, or rises towards a maximum
-        toward_hi = np.where(may_convex[p_local], mono < 0, mono > 0)
-        parts = np.where(mono != 0, _FOLD_CUTS + 1, 1)
-        own = np.repeat(np.arange(p_idx.size), parts)
-        # each cut piece's place from its fold end (0: at the fold)
-        place = np.arange(own.size) - np.repeat(np.cumsum(parts) - parts, parts)
-        width = (b - a)[own]
-        near = np.where(place == 0, 0.0, 2.0 ** (place - 1 - _FOLD_CUTS))
-        far = np.where(place == parts[own] - 1, 1.0, 2.0 ** (place - _FOLD_CUTS))
-        up = toward_hi[own]
-        with _quiet():
-            q_lo = np.where(up, b[own] - far * width, a[own] + near * width)
-            q_hi = np.where(up, b[own] - near * width, a[own] + far * width)
-        # the piece's own ends exactly; the cuts within it
-        start, stop = a[own], b[own]
-        q_lo = np.where(np.where(up, far == 1.0, near == 0.0), start, np.clip(q_lo, start, stop))
-        q_hi = np.where(np.where(up, near == 0.0, far == 1.0), stop, np.clip(q_hi, start, stop))
-        # increasing q within each piece: the pieces cut towards the high end reversed
-        order = np.lexsort((q_lo, own))
         return (
             may_convex,
             may_concave,
-            p_local[own][order],
-            Interval(q_lo[order], q_hi[order]),
-            pc.finite[p_idx][own][order],
+            local[runs.run_of_piece[p_idx]],
+            Interval(pc.lo[p_idx], pc.hi[p_idx]),
+            pc.finite[p_idx],
+            pc.mono[p_idx],
         )
 
     def _fold_interpreted(
@@ -882,7 +861,7 @@ class ConstraintLeg:
         found = self._fold_pieces(lo, hi, runs, boxes, r, None)
         if found is None:
             return np.zeros(n_b, dtype=np.int8), np.zeros(n_b, dtype=bool)
-        may_convex, may_concave, p_local, q, finite = found
+        may_convex, may_concave, p_local, q, finite, mono = found
         p_box = boxes[p_local]
         d2 = self._box_eval(self.d2f_dq2, lo, hi, p_box, q)
         d1 = self._box_eval(self.df_dq, lo, hi, p_box, q)
@@ -899,15 +878,18 @@ class ConstraintLeg:
         # the witnesses below only for the boxes passing so far
         keep_p = ok[p_local]
         # (ex.take: the sines and cosines of q already computed are kept)
-        p_box, p_local, q = p_box[keep_p], p_local[keep_p], ex.take(q, keep_p)
+        p_box, p_local, q, mono = p_box[keep_p], p_local[keep_p], ex.take(q, keep_p), mono[keep_p]
         n_p = np.bincount(p_local, minlength=n_b)
         s2p = s2[p_local]
         q_mid = ex.points(q.mid)
 
-        def g_at(points_lo: Array, points_hi: Array, qq: Interval) -> Interval:
-            """G = s2 F over pose boxes (one per piece) and q."""
+        def g_at(
+            points_lo: Array, points_hi: Array, qq: Interval, at: Any = slice(None)
+        ) -> Interval:
+            """G = s2 F over pose boxes (one per piece, or per piece ``at``) and q."""
             v = self._box_eval(self.f, points_lo, points_hi, np.arange(qq.lo.shape[0]), qq)
-            return Interval(np.where(s2p > 0, v.lo, -v.hi), np.where(s2p > 0, v.hi, -v.lo))
+            s2q = s2p[at]
+            return Interval(np.where(s2q > 0, v.lo, -v.hi), np.where(s2q > 0, v.hi, -v.lo))
 
         # a corner certainly reachable (G < 0 at some piece's middle) and one certainly not
         # (G > 0 on every piece): candidates chosen in floats, then certified
@@ -944,11 +926,20 @@ class ConstraintLeg:
         ok &= np.bincount(p_local, weights=g_mid.hi < 0, minlength=n_b) > 0  # reachable
         # the steps below only for the boxes still passing (the others fail anyway)
         keep_p = ok[p_local]
-        p_box, p_local, s2p, point_out = (a[keep_p] for a in (p_box, p_local, s2p, point_out))
+        p_box, p_local, s2p, point_out, mono = (
+            a[keep_p] for a in (p_box, p_local, s2p, point_out, mono)
+        )
         q, q_mid = ex.take(q, keep_p), ex.take(q_mid, keep_p)
         n_p = np.bincount(p_local, minlength=n_b)
-        g_all = g_at(point_out, point_out, q)
-        ok &= np.bincount(p_local, weights=g_all.lo > 0, minlength=n_b) == n_p  # unreachable
+        # unreachable: G > 0 over every piece; over a piece where F is monotone in q
+        # (for every pose of the box, the corner's too), at its two ends
+        from ._fold_kernels import unreachable_tests
+
+        u_at, u_lo, u_hi = unreachable_tests(mono, q.lo, q.hi)
+        g_all = g_at(point_out[u_at], point_out[u_at], Interval(u_lo, u_hi), u_at)
+        ok &= np.bincount(p_local[u_at], weights=g_all.lo > 0, minlength=n_b) == np.bincount(
+            p_local[u_at], minlength=n_b
+        )
         keep_p = ok[p_local]
         p_box, p_local, s2p = (a[keep_p] for a in (p_box, p_local, s2p))
         q, q_mid = ex.take(q, keep_p), ex.take(q_mid, keep_p)
