@@ -134,6 +134,48 @@ def test_fold_boxes_hold_a_corner_on_each_side_of_the_reach(a, b):
     assert (~reached).any(axis=1).all()
 
 
+def test_contraction_ends_within_its_tolerance_of_the_roots_spread():
+    """The branch enclosures of regular boxes hold every root, and each bound is
+    within ``rtol`` (2^-10) of the enclosure's width of the extreme root: for this
+    leg ``F`` at a joint value is exact over a box (each coordinate appears once),
+    so the certifiable bounds are the roots' extremes, here sampled densely on
+    the box's boundary (where they lie: the roots have no critical point inside
+    a regular box)."""
+    rng = np.random.default_rng(6)
+    leg, ref = five_bar_leg(), RRLeg((0.0, 0.0), A, B, "t1")
+    n = 300
+    radius = rng.uniform(4.0, 12.0, n)
+    theta = rng.uniform(-np.pi, np.pi, n)
+    centre = np.stack([radius * np.cos(theta), radius * np.sin(theta)], axis=1)
+    half = 10.0 ** rng.uniform(-3, -1, (n, 1)) * np.ones((1, 2))
+    lo, hi = centre - half, centre + half
+    reach = leg.reach(lo, hi)
+    regular = np.flatnonzero(reach.status == REGULAR)
+    assert regular.size > 250
+    t = np.linspace(0.0, 1.0, 801)
+    for i in regular:
+        x0, y0 = lo[i]
+        x1, y1 = hi[i]
+        edge = np.concatenate([
+            np.stack([x0 + t * (x1 - x0), np.full_like(t, y0)], 1),
+            np.stack([x0 + t * (x1 - x0), np.full_like(t, y1)], 1),
+            np.stack([np.full_like(t, x0), y0 + t * (y1 - y0)], 1),
+            np.stack([np.full_like(t, x1), y0 + t * (y1 - y0)], 1),
+        ])  # fmt: skip
+        roots = ref.angles(edge)
+        for b in range(2):
+            enclosure = reach.branches[b][i]
+            lo_b, hi_b = float(enclosure.lo), float(enclosure.hi)
+            # the roots unwrapped next to the enclosure
+            turns = np.round((0.5 * (lo_b + hi_b) - roots[:, b]) / (2 * np.pi))
+            q = roots[:, b] + 2 * np.pi * turns
+            width = hi_b - lo_b
+            assert lo_b <= q.min() + 1e-12 and q.max() <= hi_b + 1e-12
+            slack = 2.0**-10 * width + 1e-9 * (q.max() - q.min()) + 1e-12
+            assert q.min() - lo_b <= slack
+            assert hi_b - q.max() <= slack
+
+
 def test_fold_connected_boxes_hold_both_sides_and_a_fold_path():
     rng = np.random.default_rng(2)
     leg, ref = five_bar_leg(), RRLeg((0.0, 0.0), A, B, "t1")

@@ -97,8 +97,9 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     ],
     "moveability.mechanisms.tape._contract": [
         (
-            array(I8, 2), R1, R1, I8, array(I8), R2, R2, I8, I8, R2, R2, array(I8), R1, W1, W1,
-            W1, W1, I8, F8,
+            array(I8, 2), R1, R1, I8, array(I8), R2, R2, I8, I8, R2, R2, array(I8), R1,
+            W1, W1, W1, W1, array(I8, out=True), array(I8, out=True),
+            W1, W1, W1, W1, array(I8, out=True), array(I8, out=True), I8, F8,
         )
     ],
     "moveability.mechanisms.expressions._point_trig": [(R1,)],

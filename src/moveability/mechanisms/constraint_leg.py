@@ -655,7 +655,7 @@ class ConstraintLeg:
         # contract the certified roots of the regular boxes
         use = cert & regular[runs.box]
         if use.any():
-            r_lo, r_hi = self._contract(lo, hi, runs, np.flatnonzero(use))
+            r_lo, r_hi = self._contract(lo, hi, runs, np.flatnonzero(use), (f_start, f_end))
             idx = np.flatnonzero(use)
             for b, sign in ((0, 1), (1, -1)):
                 sel = s[idx] == sign
@@ -693,55 +693,69 @@ class ConstraintLeg:
         hi: Array,
         runs: _Runs,
         idx: NDArray[np.intp],
+        ends: tuple[Interval, Interval],
         iterations: int = 40,
         rtol: float = 2.0**-10,
     ) -> tuple[Array, Array]:
-        """Enclosures of the roots of certified runs ``idx``, by bisection on F's sign.
+        """Enclosures of the roots of certified runs ``idx`` (``ends``: ``F`` over each
+        box at the start and the end of every run): the largest point found
+        certified below each root and the smallest found certified above it.
 
-        A run stops once both its bounds are known within ``rtol`` of the
-        enclosure's width (the root's own spread over the box), or after
-        ``iterations`` halvings: a bound's uncertainty then widens the
+        Each bound has a bracket: a point certified on its side (``sign * F < 0``
+        below, ``> 0`` above), one not. Its next point comes by regula falsi on
+        the bound of ``F`` that decides the side (the Illinois way: the value at
+        an end kept twice in a row is halved), at least a quarter of the
+        tolerance inside the bracket; by bisection where the values are not
+        finite, or after three points in a row that did not halve the bracket
+        (:func:`falsi_points`). A run stops once both brackets are within
+        ``rtol`` of the enclosure's width (the root's own spread over the box),
+        or after ``iterations`` points: a bound's uncertainty then widens the
         enclosure by at most that fraction."""
         box = runs.box[idx]
         sign = runs.mono[idx].astype(np.float64)
-        # lower bound: the largest point certified below the root (sign * F < 0)
-        below_a = runs.start[idx].copy()
-        below_b = runs.end.lo[idx].copy()
-        # upper bound: the smallest point certified above it (sign * F > 0)
-        above_a = runs.start[idx].copy()
-        above_b = runs.end.hi[idx].copy()
+        up = sign > 0
+        f_start, f_end = ends[0][idx], ends[1][idx]
+        # lower bound: the largest point certified below the root (sign * F < 0),
+        # decided by the bound phi = sign * F's upper bound; its bracket (c: certified)
+        below = _Bracket(
+            runs.start[idx].copy(), runs.end.lo[idx].copy(),
+            np.where(up, f_start.hi, -f_start.lo), np.where(up, f_end.hi, -f_end.lo),
+        )  # fmt: skip
+        # upper bound: the smallest point certified above it (sign * F > 0), by psi
+        above = _Bracket(
+            runs.end.hi[idx].copy(), runs.start[idx].copy(),
+            np.where(up, f_end.lo, -f_end.hi), np.where(up, f_start.lo, -f_start.hi),
+        )  # fmt: skip
         compiled = getattr(self.f, "tape", None)
         kinds = None if compiled is None else tape.trig_kinds(compiled)
         if compiled is not None and kinds is not None:
             # the same steps in one compiled loop (moveability.mechanisms.tape.contract)
-            return tape.contract(
-                compiled, kinds, lo, hi, box, sign, (below_a, below_b), (above_a, above_b),
+            tape.contract(
+                compiled, kinds, lo, hi, box, sign, below.arrays(), above.arrays(),
                 iterations, rtol,
             )  # fmt: skip
+            return below.c, above.c
         active = np.arange(box.size)
         for _ in range(iterations):
-            width = above_b[active] - below_a[active]
-            done = (below_b[active] - below_a[active] <= rtol * width) & (
-                above_b[active] - above_a[active] <= rtol * width
+            width = above.c[active] - below.c[active]
+            done = (below.o[active] - below.c[active] <= rtol * width) & (
+                above.c[active] - above.o[active] <= rtol * width
             )
             active = active[~done]
             if not active.size:
                 break
-            m1 = 0.5 * (below_a[active] + below_b[active])
-            m2 = 0.5 * (above_a[active] + above_b[active])
+            tol = 0.25 * rtol * (above.c[active] - below.c[active])
+            m1 = below.point(active, tol)
+            m2 = above.point(active, tol)
             b = box[active]
             v = self._box_eval(
                 self.f, lo, hi, np.concatenate([b, b]), ex.points(np.concatenate([m1, m2]))
             )
             k = active.size
-            s2 = np.concatenate([sign[active], sign[active]])
-            neg = np.where(s2 > 0, v.hi < 0, v.lo > 0)
-            pos = np.where(s2 > 0, v.lo > 0, v.hi < 0)
-            below_a[active] = np.where(neg[:k], m1, below_a[active])
-            below_b[active] = np.where(neg[:k], below_b[active], m1)
-            above_b[active] = np.where(pos[k:], m2, above_b[active])
-            above_a[active] = np.where(pos[k:], above_a[active], m2)
-        return below_a, above_b
+            s_up = up[active]
+            below.update(active, m1, np.where(s_up, v.hi[:k], -v.lo[:k]), side=-1.0)
+            above.update(active, m2, np.where(s_up, v.lo[k:], -v.hi[k:]), side=1.0)
+        return below.c, above.c
 
     def _fold_programs(
         self,
@@ -1064,6 +1078,75 @@ class ConstraintLeg:
                     if (np.where(s2 > 0, v.hi < 0, v.lo > 0)).any():
                         return j, direction, s2, float(runs.start[0]), float(runs.end.hi[0])
         raise ValueError(f"leg {self.joint}: no monotone axis")  # pragma: no cover
+
+
+def falsi_points(c: Any, o: Any, fc: Any, fo: Any, slow: Any, tol: Any) -> Array:
+    """The next points of brackets ``[c, o]`` (either order; ``c`` certified on its
+    side, with ``fc`` and ``fo`` the values deciding the side at the two ends):
+    regula falsi, kept ``tol`` inside the bracket, or the middle where a value is
+    not finite, the two are equal, the bracket is narrower than ``2 tol`` or
+    ``slow`` (steps in a row that did not halve it) reached ``tape.SLOW_STEPS``.
+    Scalars or arrays; the compiled contraction computes the same floats.
+
+    Examples
+    --------
+    >>> float(falsi_points(0.0, 1.0, -1.0, 3.0, 0, 0.01))
+    0.25
+    >>> float(falsi_points(0.0, 1.0, float("nan"), 3.0, 0, 0.01))
+    0.5
+    """
+    with np.errstate(all="ignore"):
+        ratio = fc / (fc - fo)
+        guess = c + (o - c) * ratio
+        low = np.minimum(c, o) + tol
+        high = np.maximum(c, o) - tol
+        falsi = np.isfinite(fc) & np.isfinite(fo) & (fc != fo)
+        falsi &= (slow < tape.SLOW_STEPS) & (low <= high)
+        return np.where(falsi, np.minimum(np.maximum(guess, low), high), 0.5 * (c + o))
+
+
+@dataclass
+class _Bracket:
+    """The brackets of one bound of the runs being contracted: ``c`` the points
+    certified on the bound's side, ``o`` the others, ``fc`` and ``fo`` the values
+    deciding the side there (NaN: unknown), ``last`` the end moved last (+1:
+    ``c``, -1: ``o``, 0: none), ``slow`` the steps in a row that did not halve
+    the bracket."""
+
+    c: Array
+    o: Array
+    fc: Array
+    fo: Array
+    last: NDArray[np.int64] = field(init=False)
+    slow: NDArray[np.int64] = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.last = np.zeros(self.c.size, dtype=np.int64)
+        self.slow = np.zeros(self.c.size, dtype=np.int64)
+
+    def arrays(
+        self,
+    ) -> tuple[tuple[Array, Array, Array, Array], tuple[NDArray[np.int64], NDArray[np.int64]]]:
+        """The arrays as :func:`moveability.mechanisms.tape.contract` takes them."""
+        return (self.c, self.o, self.fc, self.fo), (self.last, self.slow)
+
+    def point(self, at: NDArray[np.intp], tol: Array) -> Array:
+        return falsi_points(self.c[at], self.o[at], self.fc[at], self.fo[at], self.slow[at], tol)
+
+    def update(self, at: NDArray[np.intp], m: Array, value: Array, side: float) -> None:
+        """The bracket of the runs ``at`` after the points ``m``, where the value
+        deciding the side is ``value``: certified where ``side * value > 0``."""
+        c, o, fc, fo = self.c[at], self.o[at], self.fc[at], self.fo[at]
+        certified = side * value > 0
+        before = np.abs(o - c)
+        # the Illinois step: the other end's value halved when an end moves twice
+        fo = np.where(certified & (self.last[at] == 1), 0.5 * fo, fo)
+        fc = np.where(~certified & (self.last[at] == -1), 0.5 * fc, fc)
+        c, fc = np.where(certified, m, c), np.where(certified, value, fc)
+        o, fo = np.where(certified, o, m), np.where(certified, fo, value)
+        self.c[at], self.o[at], self.fc[at], self.fo[at] = c, o, fc, fo
+        self.last[at] = np.where(certified, 1, -1)
+        self.slow[at] = np.where(np.abs(o - c) > 0.5 * before, self.slow[at] + 1, 0)
 
 
 def _as_iv(value: Any, n: int) -> Interval:

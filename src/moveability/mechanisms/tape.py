@@ -297,6 +297,8 @@ def _max0(x: float) -> float:  # pragma: no cover - compiled
 
 #: elements per block of :func:`_run` (its registers stay in cache)
 PIECE_BLOCK = 256
+#: bracket steps in a row that did not halve it before a bisection (the contraction)
+SLOW_STEPS = 3
 
 
 @kernel
@@ -597,6 +599,20 @@ def trig_kinds(tape: Tape) -> NDArray[np.int64] | None:
     return np.array(kinds, dtype=np.int64)
 
 
+@kernel(inline=True)
+def _falsi_point(
+    c: float, o: float, fc: float, fo: float, slow: int, tol: float
+) -> float:  # pragma: no cover - compiled
+    """``constraint_leg.falsi_points`` of one bracket: the same floats."""
+    ratio = fc / (fc - fo) if fc != fo else 0.0
+    guess = c + (o - c) * ratio
+    low = min(c, o) + tol
+    high = max(c, o) - tol
+    if np.isfinite(fc) and np.isfinite(fo) and fc != fo and slow < SLOW_STEPS and low <= high:
+        return min(max(guess, low), high)
+    return 0.5 * (c + o)
+
+
 @kernel
 def _contract(
     code: NDArray[np.int64],
@@ -612,17 +628,27 @@ def _contract(
     hi: Array,
     box: NDArray[np.int64],
     sign: Array,
-    below_a: Array,
-    below_b: Array,
-    above_a: Array,
-    above_b: Array,
+    b_c: Array,
+    b_o: Array,
+    b_fc: Array,
+    b_fo: Array,
+    b_last: NDArray[np.int64],
+    b_slow: NDArray[np.int64],
+    a_c: Array,
+    a_o: Array,
+    a_fc: Array,
+    a_fo: Array,
+    a_last: NDArray[np.int64],
+    a_slow: NDArray[np.int64],
     iterations: int,
     rtol: float,
 ) -> None:  # pragma: no cover - compiled
-    """The bisection of ``ConstraintLeg._contract`` on F's sign, every iteration
-    over the runs still active, the tape evaluated at ``[m, m]`` (its sines and
-    cosines by ``intervals.point_sin_cos``, its derived inputs of the pose
-    ``pose_lo[x, box]``): the same steps on the same floats."""
+    """The steps of ``ConstraintLeg._contract`` on its two brackets of each run
+    (``b_*`` below the root, ``a_*`` above it: ``c``, ``o``, ``fc``, ``fo``,
+    ``last``, ``slow`` as in ``constraint_leg._Bracket``, updated in place), every
+    iteration over the runs still active, the tape evaluated at ``[m, m]`` (its
+    sines and cosines by ``intervals.point_sin_cos``, its derived inputs of the
+    pose ``pose_lo[x, box]``): the same steps on the same floats."""
     block = PIECE_BLOCK
     r_lo = np.empty((slots, block))
     r_hi = np.empty((slots, block))
@@ -644,10 +670,8 @@ def _contract(
         kept = 0
         for a in range(count):
             i = active[a]
-            width = above_b[i] - below_a[i]
-            done = (below_b[i] - below_a[i] <= rtol * width) and (
-                above_b[i] - above_a[i] <= rtol * width
-            )
+            width = a_c[i] - b_c[i]
+            done = (b_o[i] - b_c[i] <= rtol * width) and (a_c[i] - a_o[i] <= rtol * width)
             if not done:
                 active[kept] = i
                 kept += 1
@@ -657,12 +681,13 @@ def _contract(
         for start in range(0, count, half):
             m = min(half, count - start)
             # the points m1 (below) and m2 (above) of each run, one column for both
-            # while the two brackets are still one (the same point, the same value)
+            # while they are the same point (the same value)
             cols = 0
             for t in range(m):
                 i = active[start + t]
-                m1 = 0.5 * (below_a[i] + below_b[i])
-                m2 = 0.5 * (above_a[i] + above_b[i])
+                tol = 0.25 * rtol * (a_c[i] - b_c[i])
+                m1 = _falsi_point(b_c[i], b_o[i], b_fc[i], b_fo[i], b_slow[i], tol)
+                m2 = _falsi_point(a_c[i], a_o[i], a_fc[i], a_fo[i], a_slow[i], tol)
                 col1[t] = cols
                 point[cols] = m1
                 cols += 1
@@ -700,23 +725,41 @@ def _contract(
                 i = active[start + t]
                 e1 = col1[t]
                 e2 = col2[t]
-                m1 = point[e1]
-                m2 = point[e2]
-                v1_lo = r_lo[out, e1]
-                v1_hi = r_hi[out, e1]
-                v2_lo = r_lo[out, e2]
-                v2_hi = r_hi[out, e2]
                 up = sign[i] > 0
-                neg = (v1_hi < 0) if up else (v1_lo > 0)
-                pos = (v2_lo > 0) if up else (v2_hi < 0)
-                if neg:
-                    below_a[i] = m1
+                # constraint_leg._Bracket.update of each bracket (written out: a
+                # helper taking the arrays, called per run, costs more than this)
+                m1 = point[e1]
+                phi = r_hi[out, e1] if up else -r_lo[out, e1]
+                before = abs(b_o[i] - b_c[i])
+                if -phi > 0:
+                    if b_last[i] == 1:
+                        b_fo[i] = 0.5 * b_fo[i]
+                    b_c[i] = m1
+                    b_fc[i] = phi
+                    b_last[i] = 1
                 else:
-                    below_b[i] = m1
-                if pos:
-                    above_b[i] = m2
+                    if b_last[i] == -1:
+                        b_fc[i] = 0.5 * b_fc[i]
+                    b_o[i] = m1
+                    b_fo[i] = phi
+                    b_last[i] = -1
+                b_slow[i] = b_slow[i] + 1 if abs(b_o[i] - b_c[i]) > 0.5 * before else 0
+                m2 = point[e2]
+                psi = r_lo[out, e2] if up else -r_hi[out, e2]
+                before = abs(a_o[i] - a_c[i])
+                if psi > 0:
+                    if a_last[i] == 1:
+                        a_fo[i] = 0.5 * a_fo[i]
+                    a_c[i] = m2
+                    a_fc[i] = psi
+                    a_last[i] = 1
                 else:
-                    above_a[i] = m2
+                    if a_last[i] == -1:
+                        a_fc[i] = 0.5 * a_fc[i]
+                    a_o[i] = m2
+                    a_fo[i] = psi
+                    a_last[i] = -1
+                a_slow[i] = a_slow[i] + 1 if abs(a_o[i] - a_c[i]) > 0.5 * before else 0
 
 
 def contract(
@@ -726,16 +769,14 @@ def contract(
     hi: Array,
     box: NDArray[np.intp],
     sign: Array,
-    below: tuple[Array, Array],
-    above: tuple[Array, Array],
+    below: tuple[tuple[Array, Array, Array, Array], tuple[NDArray[np.int64], NDArray[np.int64]]],
+    above: tuple[tuple[Array, Array, Array, Array], tuple[NDArray[np.int64], NDArray[np.int64]]],
     iterations: int,
     rtol: float,
-) -> tuple[Array, Array]:
-    """``ConstraintLeg._contract`` compiled: the runs' brackets ``below`` (a point
-    certified below the root, one not) and ``above``, halved ``iterations`` times at
-    most; returns the lower and upper bounds. ``kinds`` from :func:`trig_kinds`."""
-    below_a, below_b = (np.array(v, dtype=np.float64) for v in below)
-    above_a, above_b = (np.array(v, dtype=np.float64) for v in above)
+) -> None:
+    """``ConstraintLeg._contract`` compiled: the runs' two brackets (each ``(c, o,
+    fc, fo)`` float64 arrays and ``(last, slow)`` int64 arrays, updated in place)
+    after ``iterations`` points at most. ``kinds`` from :func:`trig_kinds`."""
     lo_c = np.ascontiguousarray(lo, dtype=np.float64)
     hi_c = np.ascontiguousarray(hi, dtype=np.float64)
     # the derived inputs of the pose over every box, once (rows of the others unused)
@@ -763,14 +804,13 @@ def contract(
         hi_c,
         np.ascontiguousarray(box, dtype=np.int64),
         np.ascontiguousarray(sign, dtype=np.float64),
-        below_a,
-        below_b,
-        above_a,
-        above_b,
+        *below[0],
+        *below[1],
+        *above[0],
+        *above[1],
         int(iterations),
         float(rtol),
     )
-    return below_a, above_b
 
 
 # ----------------------------------------------------------------- isolation
