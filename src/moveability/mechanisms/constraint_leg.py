@@ -23,8 +23,9 @@ box. Such a run holds no root when ``F`` at its two ends shows no change of
 sign (its start on the side of the sign of ``dF/dq``, or its end on the
 other), and is dropped; it is certified to hold exactly one root for every
 pose when ``F`` has definite opposite signs at its two ends. Then each
-root's enclosure is contracted by bisection on ``F``'s sign at points of the
-run. Over the box the leg is
+root's enclosure is contracted on ``F``'s sign at points of the run (regula
+falsi, safeguarded by bisection): its bounds are points certified on either
+side of the root. Over the box the leg is
 
 ``REGULAR``
     two runs, one certified root of each sign: every pose has exactly these
