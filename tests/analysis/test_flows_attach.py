@@ -221,3 +221,29 @@ def test_attachments_of_both_signs_are_those_found_apart(seed: int) -> None:
         reference = reference_attached(d, nodes, bits[s], exists, faces, neighbours, spans)
         assert np.array_equal(got_nodes, reference)
     assert per_face.any() and ptr[-1] > ptr[0]  # something waits
+
+
+@pytest.mark.parametrize(
+    ("spec", "precision"),
+    [("five-bar-custom.toml", 0.2), ("three-rrr.toml", [1.0, 1.0, 0.4])],
+)
+def test_without_flows_the_attachment_is_that_of_no_flow_bits(spec, precision):
+    """A mechanism whose legs give no flows skips the attachment's runs: its open
+    nodes are those the runs give with no flow bit (a node attaches only where
+    none of its slots may hold a configuration)."""
+    from pathlib import Path
+
+    from moveability import analyze, load_spec
+    from moveability.analysis.flows import dead_or_certified, supports_flows
+
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    result = analyze(load_spec(examples / spec), precision=precision, resolve=False)
+    assert not supports_flows(result.mechanism)
+    nodes, bits, exists, faces, _ = result._flows
+    assert not bits.any()
+    for row, s in enumerate((1, -1)):
+        done = dead_or_certified(result.table, s)
+        runs = attached_nodes(
+            done, nodes, bits[row], exists, faces, result._neighbours, result._spans
+        )
+        assert np.array_equal(result.open_nodes[row], ~done & ~runs)

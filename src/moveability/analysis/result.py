@@ -1099,6 +1099,16 @@ class Analysis:
         after the first has them all), so the result is exactly that of all the
         flows."""
         nodes, bits, exists, faces, _ = self._flows
+        if not supports_flows(self.mechanism):
+            # no flow: a node attaches only where none of its slots may hold a
+            # configuration (as the attachment's runs would find)
+            empty = nodes[~exists.any(axis=1)]
+            out = []
+            for d in done:
+                alone = np.zeros_like(d)
+                alone[empty[:, 0], empty[:, 1]] = True
+                out.append(alone & ~d)
+            return out
         runs = Attachment.both(done, nodes, exists, self._neighbours, self._spans)
         attached = [a.run(bits[row], faces) for a, row in zip(runs, rows, strict=True)]
         missing = self._left_open(done, attached) & ~self._complete_flows
