@@ -227,6 +227,15 @@ def test_spec_errors_name_the_key(path, value, message):
         normalise_custom_spec(_with(path, value))
 
 
+def test_a_constraint_without_second_derivative_names_its_key(monkeypatch):
+    """``abs`` of an expression of the joint has no second derivative in it (sympy
+    gives a Dirac delta): the error names the constraint and the derivative."""
+    monkeypatch.setenv("MOVEABILITY_CACHE_DIR", "")
+    spec = _with(("legs", 0, "constraint"), "abs(x - L1*cos(t1)) + (y - L1*sin(t1))**2 - L2")
+    with pytest.raises(SpecError, match=r"legs\[0\]\.constraint.*d2F/dt1\^2"):
+        CustomMechanism(spec)
+
+
 def test_unknown_top_level_key():
     spec = five_bar_spec()
     spec["lengths"] = {}
