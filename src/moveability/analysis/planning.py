@@ -188,10 +188,12 @@ def _waypoints(
         lo_u, hi_u = leaves.lo[lu] + offset, leaves.hi[lu] + offset
         shift = _touching(analysis, leaves, lo_u, hi_u, lv, offset)
         lo_v, hi_v = leaves.lo[lv] + shift, leaves.hi[lv] + shift
-        shared = 0.5 * (np.maximum(lo_u, lo_v) + np.minimum(hi_u, hi_v))
+        face_lo, face_hi = np.maximum(lo_u, lo_v), np.minimum(hi_u, hi_v)
         if here is not None and t.folding[lv].any():
             # between two fold leaves the middle may be beyond the reach
-            shared = _reachable_pose(analysis, np.maximum(lo_u, lo_v), np.minimum(hi_u, hi_v))
+            shared = _reachable_pose(analysis, face_lo, face_hi)
+        else:
+            shared = 0.5 * (face_lo + face_hi)
         if here is not None:
             out += [(pose, pu) for pose in here.through(current, shared)]
         out.append((shared, pu))

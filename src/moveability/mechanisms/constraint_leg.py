@@ -595,11 +595,7 @@ class ConstraintLeg:
         box = pieces.box[mono]
         at_lo = self._box_eval(self.f, lo, hi, box, ex.points(pieces.lo[mono]))
         at_hi = self._box_eval(self.f, lo, hi, box, ex.points(pieces.hi[mono]))
-        free = np.where(
-            pieces.mono[mono] > 0,
-            (at_lo.lo > 0) | (at_hi.hi < 0),
-            (at_lo.hi < 0) | (at_hi.lo > 0),
-        )
+        free = _root_free(pieces.mono[mono], at_lo, at_hi)
         if not free.any():
             return pieces
         keep = np.ones(pieces.box.size, dtype=bool)
@@ -619,11 +615,7 @@ class ConstraintLeg:
         runs = self._runs(self._root_pieces(lo, hi), lo.shape[0])
         f_start = self._box_eval(self.f, lo, hi, runs.box, ex.points(runs.start))
         f_end = self._box_eval(self.f, lo, hi, runs.box, runs.end)
-        up, down = runs.mono > 0, runs.mono < 0
-        free = runs.finite & (
-            (up & ((f_start.lo > 0) | (f_end.hi < 0)))
-            | (down & ((f_start.hi < 0) | (f_end.lo > 0)))
-        )
+        free = runs.finite & _root_free(runs.mono, f_start, f_end)
         if free.any():
             keep = np.flatnonzero(~free)
             runs, f_start, f_end = runs.take(keep), f_start[keep], f_end[keep]
@@ -1079,6 +1071,26 @@ class ConstraintLeg:
                     if (np.where(s2 > 0, v.hi < 0, v.lo > 0)).any():
                         return j, direction, s2, float(runs.start[0]), float(runs.end.hi[0])
         raise ValueError(f"leg {self.joint}: no monotone axis")  # pragma: no cover
+
+
+def _root_free(mono: NDArray[np.int8], start: Interval, end: Interval) -> NDArray[np.bool_]:
+    """Where ``F``, monotone in ``q`` over a stretch of the range (``mono`` the sign
+    of ``dF/dq`` certified there; 0: not monotone), with enclosures ``start`` and
+    ``end`` at its two ends, holds no root: its start on the side of ``mono``'s
+    sign, or its end on the other.
+
+    Examples
+    --------
+    >>> from moveability.intervals import Interval
+    >>> _root_free(np.array([1, 1, 0], dtype=np.int8), Interval(np.array([0.5, -1.0, 0.5])),
+    ...            Interval(np.array([2.0, 1.0, 2.0]))).tolist()
+    [True, False, False]
+    """
+    return np.where(
+        mono > 0,
+        (start.lo > 0) | (end.hi < 0),
+        (mono < 0) & ((start.hi < 0) | (end.lo > 0)),
+    )
 
 
 def falsi_points(c: Any, o: Any, fc: Any, fo: Any, slow: Any, tol: Any) -> Array:

@@ -782,28 +782,15 @@ def _leg_bodies(spec: Mapping[str, Any]) -> dict[str, str]:
         names = {sym: f"_a{a}" for a, sym in enumerate([*pose_syms, q, *param_syms])}
         printer = _Printer(names)
         key = f"legs[{i}].constraint"
-
-        def derivative(
-            expr: sympy.Expr, what: str, key: str = key, printer: _Printer = printer
-        ) -> str:
-            """The printed derivative ``expr`` of the constraint: one the printer
-            cannot write (the Dirac delta of ``abs`` twice differentiated) is an
-            error of the constraint."""
-            try:
-                return printer(expr)
-            except SpecError:
-                raise SpecError(
-                    key,
-                    f"a constraint with a derivative {what} everywhere (abs or sign of an "
-                    "expression of the joint has none)",
-                    Plain(f"{what} = {expr}"),
-                ) from None
-
-        out[f"{i}.f"] = printer(f)
-        out[f"{i}.df_dq"] = derivative(sympy.diff(f, q), f"dF/d{q.name}")
-        out[f"{i}.d2f_dq2"] = derivative(sympy.diff(f, q, 2), f"d2F/d{q.name}^2")
+        derivatives = {
+            f"{i}.df_dq": (sympy.diff(f, q), f"dF/d{q.name}"),
+            f"{i}.d2f_dq2": (sympy.diff(f, q, 2), f"d2F/d{q.name}^2"),
+        }
         for j, x in enumerate(pose_syms):
-            out[f"{i}.df_dx.{j}"] = derivative(sympy.diff(f, x), f"dF/d{x.name}")
+            derivatives[f"{i}.df_dx.{j}"] = (sympy.diff(f, x), f"dF/d{x.name}")
+        out[f"{i}.f"] = printer(f)
+        for name, (expr, what) in derivatives.items():
+            out[name] = _printed_derivative(printer, expr, what, key)
         pose_printer = _Printer({sym: f"_a{a}" for a, sym in enumerate([*pose_syms, *param_syms])})
         for b, text in enumerate(leg.get("branches", [])):
             out[f"{i}.branch.{b}"] = pose_printer(_parse(text, f"legs[{i}].branches[{b}]", symbols))
@@ -813,6 +800,21 @@ def _leg_bodies(spec: Mapping[str, Any]) -> dict[str, str]:
                 modular(_parse(item["angle"], akey, {**symbols, q.name: q}))
             )
     return out
+
+
+def _printed_derivative(printer: _Printer, expr: sympy.Expr, what: str, key: str) -> str:
+    """A derivative ``expr`` (named ``what``) of the constraint at ``key``, printed:
+    one the printer cannot write (the Dirac delta of ``abs`` or ``sign`` of an
+    expression of the joint, differentiated) is an error of that constraint."""
+    try:
+        return printer(expr)
+    except SpecError:
+        raise SpecError(
+            key,
+            f"a constraint with a derivative {what} everywhere (abs or sign of an "
+            "expression of the joint has none)",
+            Plain(f"{what} = {expr}"),
+        ) from None
 
 
 # ------------------------------------------------------------------ the cache
