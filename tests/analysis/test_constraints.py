@@ -78,7 +78,7 @@ def test_obstacle_aspects_find_the_small_ones(base):
     assert 22 <= coarse.count[0] <= 28
     assert coarse.count[1] is None or coarse.count[1] >= 28
     # finer, every aspect is found and no other can hide: the count is definite
-    assert analyze(from_spec(spec), precision=0.1, generalized_aspects=True).count == (28, 28)
+    assert analyze(from_spec(spec), precision=0.05, generalized_aspects=True).count == (28, 28)
 
 
 GEOMETRIES = [

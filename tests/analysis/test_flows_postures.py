@@ -26,7 +26,7 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 CASES = [
     ("five-bar-paper.toml", 0.3, None),
     ("biglide.toml", 0.3, None),
-    ("delta.toml", 0.25, None),
+    ("delta.toml", 0.1, None),
     ("three-rpr.toml", [1.0, 1.0, 0.3], None),
     ("five-bar-paper.toml", 0.5, {"C": (-2.0, 2.0)}),
 ]

@@ -243,7 +243,7 @@ def test_smoothing_through_several_poses_and_posture_changes():
 
 
 def test_smoothing_across_the_seam_of_a_periodic_angle():
-    result = analyze(RPR_SEAM, precision=(2.0, 2.0, 0.3))
+    result = analyze(RPR_SEAM, precision=(0.5, 0.5, 0.3))
     points = np.array(
         [[4.80684312, 0.23712648, 2.84706834], [7.92276276, 11.12599958, -2.89615573]]
     )

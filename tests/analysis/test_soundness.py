@@ -825,7 +825,8 @@ def test_pose_outside_the_tree_box_is_not_declared_out():
     configuration is in region 0 too. The analysis still says X is out of
     region 0, and {X, Y} (and {X} alone) infeasible."""
     m = _mechanism(LENS, None, None)
-    result = analyze(m, precision=0.0005, resolve=False)
+    # the lens is 0.004 wide: cells of 1e-6 across it (the box's x span over 4096)
+    result = analyze(m, precision=(1e-6, 0.0005), resolve=False)
     x = 0.9959963836669922
     X = np.array([[x, 0.0]])
     assert (_exact_reach(m, X) == 1).all()

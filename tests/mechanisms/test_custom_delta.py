@@ -24,6 +24,7 @@ import pytest
 from scipy import ndimage
 
 from moveability import analyze
+from moveability.analysis.result import analysis_box
 from moveability.hypertree.status import IN, OUT
 from moveability.limits import JointLimit
 from moveability.mechanisms import Delta
@@ -44,7 +45,7 @@ DESIGNS = {
     "other": (
         (10.0, 4.0, 8.0, 15.0),
         [(-np.pi / 2, np.pi / 3), (-np.pi / 3, np.pi / 2), (-np.pi / 4, 2 * np.pi / 3)],
-        2.0,
+        1.0,
     ),
 }
 
@@ -146,7 +147,9 @@ def reference_count(design, limits, n=41):
 def pair(request):
     design, limits, precision = DESIGNS[request.param]
     builtin = Delta(*design, tuple(JointLimit(lo, hi) for lo, hi in limits))
-    custom = CustomMechanism(custom_delta_spec(design, limits, builtin.pose_box()))
+    # the box the built-in's analysis subdivides: both split the same cells
+    box = analysis_box(builtin, np.full(3, float(precision)))[:2]
+    custom = CustomMechanism(custom_delta_spec(design, limits, box))
     t0 = time.perf_counter()
     a = analyze(custom, precision, resolve=False)
     t1 = time.perf_counter()

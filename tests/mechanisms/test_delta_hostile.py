@@ -257,7 +257,7 @@ CASES = {
     "arm-near-rod": ((10.0, 4.0, 8.0, 8.05), [(-PI / 2, PI / 2)] * 3, 1.0, {"resolve": False}),
     # the rod barely reaches the legs' meeting point, limits at 0 and pi/2
     "rod-barely": ((10.0, 4.0, 8.0, 6.05), [(0.0, PI / 2)] * 3, 0.02, {"resolve": False}),
-    "unlimited": ((10.0, 4.0, 8.0, 10.0), [None] * 3, 2.0, {"resolve": False}),
+    "unlimited": ((10.0, 4.0, 8.0, 10.0), [None] * 3, 1.0, {"resolve": False}),
     "radii-close": ((4.01, 4.0, 8.0, 10.0), [(0.0, PI / 2)] * 3, 1.0, {"resolve": False}),
     "across-pi": (
         (10.0, 4.0, 8.0, 10.0),

@@ -327,7 +327,7 @@ def test_joint_space_raster_matches_brute_force(spec):
 
 @pytest.mark.parametrize("spec", [SPEC, FULL_TURN])
 def test_joint_space_traces_are_filled(spec):
-    analysis = analyze(load_spec(spec), precision=0.1)
+    analysis = analyze(load_spec(spec), precision=0.05)
     q1, q2, holds = joint_space_raster(analysis, resolution=150)
     g1, g2 = np.meshgrid(q1, q2)
     m = analysis.mechanism

@@ -202,7 +202,7 @@ def test_coarsened_cells_stay_conservative(analysis):
 
 
 def test_cells_keep_every_possible_component_while_regions_may_be_missing():
-    result = analyze(load_spec("examples/three-rpr.toml"), precision=1.0)
+    result = analyze(load_spec("examples/three-rpr.toml"), precision=2.0)
     assert not result.complete  # feasibility then reads every possible component
     cells = page_cells(result, max_cells=30_000)
     assert cells.layout.n_extra > 0

@@ -48,6 +48,7 @@ __all__ = [
     "RESOLVE_ROUND",
     "Analysis",
     "Region",
+    "analysis_box",
     "analyze",
     "available_memory",
     "count_text",
@@ -59,8 +60,9 @@ Progress = Callable[[int, int, int], object]
 #: levels below the precision that :func:`analyze` may refine to settle the count
 RESOLVE_LEVELS = 12
 #: leaves the resolution may add, as a multiple of the leaves of the plain pass
-#: (at least 32768)
-RESOLVE_GROWTH = 2.0
+#: (at least 32768); the plain pass's cells are the precision wide (see
+#: analysis_box), so the multiple spans several levels below it
+RESOLVE_GROWTH = 4.0
 #: leaves split in one round of the resolution at most (those with open nodes first)
 RESOLVE_ROUND = 1 << 13
 
@@ -159,6 +161,36 @@ def _depths(
     return depths
 
 
+def analysis_box(
+    mechanism: Mechanism, precision: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[int, ...]]:
+    """The box :func:`analyze` subdivides at ``precision`` (one width per pose
+    axis), and the depth of each axis there.
+
+    The tree halves every axis at each level down to the deepest axis' depth
+    ``d``; where the mechanism's bounds hold its workspace, each axis that does
+    not turn is widened to its precision times ``2**d`` (see
+    :meth:`~moveability.mechanisms.base.Mechanism.pose_box`), so that the cells
+    at the precision are the precision wide, as a grid of that spacing is, not
+    down to half of it. The cells added hold no pose of W.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability.mechanisms import FiveBar
+    >>> lo, hi, depths = analysis_box(FiveBar(7, 8, 5, 8, 5), np.array([0.5, 0.25]))
+    >>> depths, [float(v) for v in (hi - lo) / 2.0 ** np.array(depths)]
+    ((7, 7), [0.5, 0.25])
+    """
+    lo, hi = mechanism.pose_box()
+    depths = _depths(lo, hi, precision)  # refuses a precision the keys cannot hold
+    level = max(depths)
+    if level * len(depths) <= MAX_KEY_BITS:
+        lo, hi = mechanism.pose_box(precision * 2.0**level)
+        depths = _depths(lo, hi, precision)
+    return lo, hi, depths
+
+
 def analyze(
     mechanism: Mechanism | Mapping[str, Any] | str | os.PathLike[str],
     precision: float | Sequence[float] = 0.1,
@@ -178,7 +210,8 @@ def analyze(
         A mechanism, or a spec (see :func:`moveability.mechanisms.registry.load_spec`).
     precision : float or sequence of float
         Undecided leaves are refined until at most this wide (pose units: lengths
-        and radians); one number, or one per pose axis.
+        and radians); one number, or one per pose axis. The built-in mechanisms'
+        cells at the precision are this wide (see :func:`analysis_box`).
     max_leaves : int, optional
         Fail with :class:`~moveability.ResolutionError` rather than hold more
         leaves; by default :func:`leaf_budget` (what the memory available holds).
@@ -220,8 +253,7 @@ def analyze(
     eps = check_precision(precision, len(mechanism.pose_names))
     if max_leaves is None:
         max_leaves = leaf_budget(mechanism)
-    lo, hi = mechanism.pose_box()
-    depths = _depths(lo, hi, eps)
+    lo, hi, depths = analysis_box(mechanism, eps)
     if isinstance(resolve_levels, bool) or not isinstance(resolve_levels, int | np.integer):
         raise InvalidParameterError("resolve_levels", "a whole number >= 0", resolve_levels)
     if resolve_levels < 0:
@@ -984,7 +1016,8 @@ class Analysis:
         """Per pose axis, the width of the smallest cells of the pass at the
         precision (the resolution may split finer): the tree halves every axis
         at each level, until the level at which the coarsest axis is at most the
-        precision wide, or the axis' own deepest level."""
+        precision wide, or the axis' own deepest level. Where :func:`analysis_box`
+        could widen the box, that is the precision itself."""
         lo, hi = self.tree.lo, self.tree.hi
         levels = max(_depths(lo, hi, self.precisions))
         depths = np.minimum(levels, np.asarray(self.tree.max_depth)).astype(np.float64)

@@ -47,6 +47,7 @@ __all__ = [
     "Leg",
     "LegReach",
     "Mechanism",
+    "fitted_span",
     "interval_det",
     "round_down",
     "round_up",
@@ -131,6 +132,37 @@ def round_up(value: float) -> float:
 def round_down(value: float) -> float:
     """The next float below ``value``."""
     return float(np.nextafter(value, -np.inf))
+
+
+def fitted_span(lo: float, hi: float, width: float) -> tuple[float, float]:
+    """``[lo, hi]`` widened upwards to ``width`` (kept where it is as wide already).
+
+    ``lo`` stays: a mechanism's bounds sit a little outside its workspace, so the
+    first cells' edges stay off the extreme poses of W (a tangency of W's boundary
+    with a cell's edge is a case no subdivision decides). The float width of the
+    result is at most ``width`` (a tree of that box halved ``d`` times has cells
+    at most ``width / 2**d`` wide) and it holds ``[lo, hi]``; where floats cannot
+    give both, ``[lo, hi]`` is returned.
+
+    Examples
+    --------
+    >>> fitted_span(-6.0, 13.0, 32.0)
+    (-6.0, 26.0)
+    >>> fitted_span(0.0, 8.0, 8.0)
+    (0.0, 8.0)
+    """
+    span = hi - lo
+    if not (np.isfinite(span) and np.isfinite(width) and width > span > 0):
+        return lo, hi
+    new_hi = lo + width
+    # the float width may round above the width: step the top down into it
+    for _ in range(4):
+        if new_hi - lo <= width:
+            break
+        new_hi = float(np.nextafter(new_hi, -np.inf))
+    if new_hi - lo > width or new_hi < hi:
+        return lo, hi
+    return lo, new_hi
 
 
 def interval_det(rows: list[list[Interval]]) -> Interval:
@@ -397,6 +429,10 @@ class Mechanism:
     restrictions: Constraints = Constraints()
     #: the links as segments, for the constraints (None: the mechanism takes none)
     linkage: Linkage | None = None
+    #: whether :attr:`bounds` hold every pose with a configuration (a box derived
+    #: from the design), so that the analysis may widen them (see :meth:`pose_box`);
+    #: False where they are a box the user gave, which may cut the workspace
+    bounds_hold_workspace: bool = True
 
     def constrained(self, constraints: Constraints) -> Mechanism:
         """A copy of this mechanism with ``constraints`` (see
@@ -541,14 +577,38 @@ class Mechanism:
         )
         return np.ones(points.shape[0], dtype=bool) if codes is None else codes == INSIDE
 
-    def pose_box(self) -> tuple[Array, Array]:
+    def pose_box(self, widths: Array | None = None) -> tuple[Array, Array]:
         """The box the analysis subdivides: the bounds, with each periodic axis
         widened to a little more than one turn (the float 2 pi is short of it), so
-        that the leaves cover every angle."""
+        that the leaves cover every angle.
+
+        Given ``widths`` (one per pose axis) and bounds that hold the workspace
+        (:attr:`bounds_hold_workspace`), every other axis is widened upwards to
+        its width where it is narrower (see :func:`fitted_span`); the cells added
+        hold no pose of W. The analysis asks for the precision times a power of
+        two, so that its cells at the precision are that wide.
+
+        Examples
+        --------
+        >>> from moveability.mechanisms import FiveBar
+        >>> m = FiveBar(7, 8, 5, 8, 5)
+        >>> lo, hi = m.pose_box([32.0, 32.0])
+        >>> [float(v) for v in (hi - lo)]
+        [32.0, 32.0]
+        >>> bool((lo <= m.bounds[0]).all() and (hi >= m.bounds[1]).all())
+        True
+        """
         lo = np.array(self.bounds[0], dtype=np.float64)
         hi = np.array(self.bounds[1], dtype=np.float64)
         for axis in self.periodic_axes:
             hi[axis] = round_up(lo[axis] + _TWO_PI_UP)
+        if widths is None or not self.bounds_hold_workspace:
+            return lo, hi
+        want = np.broadcast_to(np.asarray(widths, dtype=np.float64), lo.shape)
+        for axis in range(lo.size):
+            if axis not in self.periodic_axes:
+                span = fitted_span(float(lo[axis]), float(hi[axis]), float(want[axis]))
+                lo[axis], hi[axis] = span
         return lo, hi
 
     def wrap_poses(self, points: Array) -> Array:

@@ -1084,6 +1084,8 @@ class CustomMechanism(Mechanism):
             self.restrictions = Constraints(passive={a.name: a.limit for a in passive})
         self.legs = tuple(legs)
         self.limits = tuple(limits)
+        # the user's box: it may cut the workspace, so the analysis keeps it
+        self.bounds_hold_workspace = False
         self.bounds = (
             np.array([s["bounds"][n][0] for n in s["pose"]], dtype=np.float64),
             np.array([s["bounds"][n][1] for n in s["pose"]], dtype=np.float64),

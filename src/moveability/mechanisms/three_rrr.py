@@ -259,6 +259,8 @@ class ThreeRRR(Mechanism):
         else:
             lo_xy = np.asarray(bounds[0], dtype=np.float64)
             hi_xy = np.asarray(bounds[1], dtype=np.float64)
+            # the user's box: it may cut the workspace, so the analysis keeps it
+            self.bounds_hold_workspace = False
         self.bounds = (
             np.array([lo_xy[0], lo_xy[1], -np.pi]),
             np.array([hi_xy[0], hi_xy[1], np.pi]),
