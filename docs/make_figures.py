@@ -27,18 +27,18 @@ def save(fig, name: str) -> None:
 
 def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
-    paper = analyze(load_spec(EXAMPLES / "five-bar-paper.toml"), precision=0.05)
+    paper = analyze(load_spec(EXAMPLES / "five-bar-paper.toml"), precision=0.03)
     save(figure("workspace", paper), "five-bar-paper-workspace.png")
     save(figure("postures", paper, pose=[3.5, 6.0]), "five-bar-paper-postures.png")
     save(figure("regions", paper), "five-bar-paper-regions.png")
     save(figure("joint-space", paper), "joint-space.png")
     save(figure("path", paper, motion=plan_motion(paper, default_poses(paper))), "path.png")
-    full = analyze(load_spec(EXAMPLES / "five-bar-full-turn.toml"), precision=0.05)
+    full = analyze(load_spec(EXAMPLES / "five-bar-full-turn.toml"), precision=0.03)
     save(figure("regions", full), "five-bar-full-turn-regions.png")
-    rpr = analyze(load_spec(EXAMPLES / "three-rpr.toml"), precision=(0.8, 0.8, 0.1))
+    rpr = analyze(load_spec(EXAMPLES / "three-rpr.toml"), precision=(0.4, 0.4, 0.1))
     save(figure("slices", rpr, phis=[-0.7853981633974483, 0.7853981633974483]),
          "three-rpr-slices.png")  # fmt: skip
-    delta = analyze(load_spec(EXAMPLES / "delta.toml"), precision=0.05, resolve=False)
+    delta = analyze(load_spec(EXAMPLES / "delta.toml"), precision=0.03, resolve=False)
     save(figure("slices", delta), "delta-slices.png")
 
 

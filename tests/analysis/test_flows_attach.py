@@ -247,3 +247,39 @@ def test_without_flows_the_attachment_is_that_of_no_flow_bits(spec, precision):
             done, nodes, bits[row], exists, faces, result._neighbours, result._spans
         )
         assert np.array_equal(result.open_nodes[row], ~done & ~runs)
+
+
+@pytest.mark.parametrize(
+    "spec, precision",
+    [("five-bar-paper.toml", 0.05), ("five-bar-full-turn.toml", 0.1), ("biglide.toml", 0.05)],
+)
+def test_a_count_proved_in_the_joint_space_builds_no_flows(spec, precision, monkeypatch):
+    """Where the joint-space count proves the listed regions to be all, the
+    analysis builds no flows (no region can hide): every answer is that of the
+    analysis that attaches the nodes all the same, and saving builds the flows."""
+    from pathlib import Path
+
+    from moveability import analyze, load_spec
+    from moveability.analysis.result import Analysis
+
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    spec_data = load_spec(examples / spec)
+    lazy = analyze(spec_data, precision=precision)
+    assert lazy.joint_count is not None and lazy.complete
+    assert lazy._flows is None and not lazy.open_nodes.any()
+    monkeypatch.setattr(Analysis, "_listed_are_all", lambda self: False)
+    eager = analyze(spec_data, precision=precision)
+    assert eager._flows is not None
+    assert lazy.to_dict() == eager.to_dict()
+    rng = np.random.default_rng(5)
+    lo, hi = lazy.tree.lo, lazy.tree.hi
+    poses = rng.uniform(lo, hi, (2000, lo.size))
+    assert lazy.locate(poses) == eager.locate(poses)
+    pairs = poses[:40].reshape(20, 2, lo.size)
+    assert [lazy.feasible(p)["feasible"] for p in pairs] == [
+        eager.feasible(p)["feasible"] for p in pairs
+    ]
+    # the saved evidence holds every flow of every node, as the eager one's
+    lazy_flows, eager_flows = lazy.evidence().flows, eager.evidence().flows
+    for a, b in zip(lazy_flows, eager_flows, strict=True):
+        assert np.array_equal(a, b)

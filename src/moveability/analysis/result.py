@@ -979,11 +979,19 @@ class Analysis:
             limits=mechanism.limits,
             reachable_contact=contact,
         )
-        self._attach(
-            leaves,
-            None if flows_of is None else (flows_of[0], flows_of[1]),
-            None if evidence is None else evidence.flows,
-        )
+        saved = None if evidence is None else evidence.flows
+        #: the flows of the nodes (see :meth:`_flow_table`), built when first needed
+        self._flows: tuple[Any, ...] | None = None
+        if self._listed_are_all():
+            # the joint-space count proves the regions the graph lists to be all:
+            # no region hides in an uncertified node, and no flow is needed for that
+            n, n_post = self.table.status.shape
+            #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1)
+            self.open_nodes = np.zeros((2, n, n_post), dtype=bool)
+            if saved is not None:
+                self._flow_table(leaves, None, saved)
+        else:
+            self._attach(leaves, None if flows_of is None else flows_of, saved)
         self._resolve()
 
     #: what a refined analysis takes from the analysis it refines (see
@@ -1007,9 +1015,10 @@ class Analysis:
         """What the analysis proved beyond its tree and sheet table (see
         :class:`Evidence`), to be saved with them."""
         # every flow of every node: a loaded analysis then tries none
+        flows = self._flows_now()
         if not self._complete_flows.all():
             self._complete(~self._complete_flows)
-        return Evidence(self._pairs, self._face_pairs, self._contact, self._flows[:4])
+        return Evidence(self._pairs, self._face_pairs, self._contact, flows[:4])
 
     @property
     def cell_size(self) -> NDArray[np.float64]:
@@ -1034,21 +1043,30 @@ class Analysis:
         return ", ".join(f"{v:g}" for v in np.atleast_1d(self.precision))
 
     # ------------------------------------------------------------ regions
-    def _attach(
+    def _listed_are_all(self) -> bool:
+        """Whether :attr:`joint_count` proves that the regions the region graph
+        lists (its possible components that hold a certified part, one region
+        each) are all the regions: its upper bound is their number."""
+        joint = self.joint_count
+        if joint is None or joint.at_most is None:
+            return False
+        g, t = self.graph, self.table
+        listed = 0
+        for row, s in enumerate((1, -1)):
+            mask = (g.certain >= 0) & (t.sign == s)
+            listed += np.unique(g.possible[row][:, :: g.slots][mask]).size
+        return listed == joint.at_most
+
+    def _flow_table(
         self,
         leaves: Any,
         reuse: tuple[Analysis, NDArray[np.intp]] | None = None,
         saved: tuple[NDArray[Any], ...] | None = None,
-    ) -> None:
-        """Nodes whose every valid configuration joins a certified sheet (see
-        :mod:`moveability.analysis.flows`); the others, alive and uncertified, are *open*:
-        a region might hide there. ``reuse`` carries the analysis this one
-        refines, with the old index of each leaf (-1 for new ones); ``saved``
-        the flows (nodes, bits, exists, faces) of a saved analysis of this
-        tree; ``leaves`` are the tree's leaves.
-
-        The flows along the pose axes are tried first, on every node; the other
-        flows only on the nodes those leave open (see :meth:`_attached`)."""
+    ) -> list[NDArray[np.bool_]]:
+        """The nodes that need a certificate (alive and uncertified for some sign)
+        with their flows along the pose axes (every flow where ``saved``, or
+        where ``reuse`` held them), kept in ``_flows``; returns the nodes done
+        (dead or certified) per sign row. See :meth:`_attach` for the arguments."""
         t = self.table
         cross = not self.generalized_aspects
         done = [dead_or_certified(t, s, cross) for s in (1, -1)]
@@ -1059,6 +1077,8 @@ class Analysis:
         # every flow of every node, see evidence; a mechanism without flows has
         # none to try)
         complete = np.full(m, saved is not None or not supports_flows(self.mechanism))
+        if reuse is not None and reuse[0]._flows is None:
+            reuse = None  # the refined analysis built none (see _listed_are_all)
         if saved is not None:
             saved_nodes, bits, exists, faces = saved
             if not np.array_equal(saved_nodes, nodes):
@@ -1071,7 +1091,7 @@ class Analysis:
             )
         else:
             old, old_index = reuse
-            old_nodes, old_bits, old_exists, old_faces, old_n = old._flows
+            old_nodes, old_bits, old_exists, old_faces, old_n = old._flows_now()
             old_row = np.full((old_n, n_post), -1, dtype=np.int64)
             old_row[old_nodes[:, 0], old_nodes[:, 1]] = np.arange(old_nodes.shape[0])
             source = np.where(
@@ -1096,8 +1116,35 @@ class Analysis:
             bits[:, fresh], exists[fresh], faces[:, fresh] = new_bits, new_exists, new_faces
         self._spans = slot_spans(t, nodes, self.mechanism.limits)
         self._neighbours = face_neighbours(self.tree, self._face_pairs)
-        self._flows: tuple[Any, ...] = (nodes, bits, exists, faces, n)
+        self._flows = (nodes, bits, exists, faces, n)
         self._complete_flows: NDArray[np.bool_] = complete
+        return done
+
+    def _flows_now(self, leaves: Any = None) -> tuple[Any, ...]:
+        """``_flows``, built first where they were not (see :meth:`_flow_table`);
+        ``leaves`` the tree's leaves, if at hand."""
+        if self._flows is None:
+            self._flow_table(_Boxes(self.tree) if leaves is None else leaves)
+        assert self._flows is not None  # built just above
+        return self._flows
+
+    def _attach(
+        self,
+        leaves: Any,
+        reuse: tuple[Analysis, NDArray[np.intp]] | None = None,
+        saved: tuple[NDArray[Any], ...] | None = None,
+    ) -> None:
+        """Nodes whose every valid configuration joins a certified sheet (see
+        :mod:`moveability.analysis.flows`); the others, alive and uncertified, are *open*:
+        a region might hide there. ``reuse`` carries the analysis this one
+        refines, with the old index of each leaf (-1 for new ones); ``saved``
+        the flows (nodes, bits, exists, faces) of a saved analysis of this
+        tree; ``leaves`` are the tree's leaves.
+
+        The flows along the pose axes are tried first, on every node; the other
+        flows only on the nodes those leave open (see :meth:`_attached`)."""
+        done = self._flow_table(leaves, reuse, saved)
+        n, n_post = self.table.status.shape
         attached = self._attached(done, (0, 1), leaves=leaves)
         #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1)
         self.open_nodes = np.zeros((2, n, n_post), dtype=bool)
@@ -1108,7 +1155,7 @@ class Analysis:
         self, done: list[NDArray[np.bool_]], attached: list[NDArray[np.bool_]]
     ) -> NDArray[np.bool_]:
         """Per node of the flows: neither done nor attached for some sign row."""
-        nodes = self._flows[0]
+        nodes = self._flows_now()[0]
         leaf, post = nodes[:, 0], nodes[:, 1]
         out = np.zeros(nodes.shape[0], dtype=bool)
         for d, a in zip(done, attached, strict=True):
@@ -1131,7 +1178,7 @@ class Analysis:
         that all the flows attach attaches in the second pass (every node open
         after the first has them all), so the result is exactly that of all the
         flows."""
-        nodes, bits, exists, faces, _ = self._flows
+        nodes, bits, exists, faces, _ = self._flows_now(leaves)
         if not supports_flows(self.mechanism):
             # no flow: a node attaches only where none of its slots may hold a
             # configuration (as the attachment's runs would find)
@@ -1154,7 +1201,7 @@ class Analysis:
     def _complete(self, missing: NDArray[np.bool_], leaves: Any = None) -> None:
         """Every flow tried on the nodes of the flows where ``missing`` holds: their
         bits and exit faces replaced in place (kept for later calls)."""
-        nodes, bits, _, faces, _ = self._flows
+        nodes, bits, _, faces, _ = self._flows_now()
         at = np.flatnonzero(missing)
         if leaves is None:
             leaves = _Boxes(self.tree)
