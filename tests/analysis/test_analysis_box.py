@@ -17,6 +17,7 @@ from moveability.hypertree.status import OUT
 from moveability.limits import JointLimit
 from moveability.mechanisms import Biglide, FiveBar, ThreeRRR, from_spec
 from moveability.mechanisms.base import fitted_span
+from region_references import five_bar, random_biglides
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -112,9 +113,55 @@ def test_widening_changes_no_definite_answer():
     a, b = analyze(m, precision=0.05), analyze(kept, precision=0.05)
     assert a.count == b.count == (2, 2)
     assert a.n_connected is b.n_connected is False
+    rng = np.random.default_rng(3)
+    _no_contradiction(a, b, rng.uniform(m.bounds[0], m.bounds[1], (3000, 2)))
+
+
+def _no_contradiction(a, b, poses):
+    """Two certified analyses of one mechanism: counts' bounds meet, decided
+    N-connectivity agrees, and no pose's answer is definite both ways."""
+    (lo_a, hi_a), (lo_b, hi_b) = a.count, b.count
+    assert max(lo_a, lo_b) <= min(x for x in (hi_a, hi_b, 10**9) if x is not None)
+    if a.n_connected is not None and b.n_connected is not None:
+        assert a.n_connected is b.n_connected
     (wa,), (wb,) = a.workspace.values(), b.workspace.values()
     assert wa[0] <= wb[1] and wb[0] <= wa[1]
-    rng = np.random.default_rng(3)
-    poses = rng.uniform(m.bounds[0], m.bounds[1], (3000, 2))
     for pa, pb in zip(a.locate(poses)["points"], b.locate(poses)["points"], strict=True):
         assert None in (pa["workspace"], pb["workspace"]) or pa["workspace"] == pb["workspace"]
+
+
+def _random_designs():
+    """8 five-bars (lengths in [1, 8], every other with equal legs, a joint in
+    three free) and 4 biglides (a third with equal legs)."""
+    rng = np.random.default_rng(13)
+    designs = []
+    while len(designs) < 8:
+        lengths = [float(v) for v in np.round(rng.uniform(1.0, 8.0, 5), 2)]
+        if len(designs) % 2:
+            lengths[3], lengths[4] = lengths[1], lengths[2]
+        limits = []
+        for _ in range(2):
+            start = float(rng.uniform(-np.pi, np.pi))
+            free = rng.random() < 1 / 3
+            limits.append(None if free else (start, start + float(rng.uniform(0.5, 2 * np.pi))))
+        try:
+            designs.append(five_bar(tuple(lengths), *limits))
+        except ValueError:
+            continue
+    return designs + random_biglides(4, 17)
+
+
+@pytest.mark.parametrize("index", range(12))
+def test_widened_and_kept_boxes_never_contradict(index):
+    """Random five-bars (equal links, free and cut joints) and biglides, each on the
+    widened box and on its bounds, at 0.1: no answer of one contradicts the other."""
+    import copy
+
+    m = _random_designs()[index]
+    kept = copy.copy(m)
+    kept.bounds_hold_workspace = False
+    a, b = analyze(m, precision=0.1), analyze(kept, precision=0.1)
+    assert (a.cell_size >= b.cell_size).all()
+    rng = np.random.default_rng(index)
+    poses = rng.uniform(m.bounds[0], m.bounds[1], (1500, 2))
+    _no_contradiction(a, b, poses)
