@@ -982,16 +982,15 @@ class Analysis:
         saved = None if evidence is None else evidence.flows
         #: the flows of the nodes (see :meth:`_flow_table`), built when first needed
         self._flows: tuple[Any, ...] | None = None
-        if self._listed_are_all():
-            # the joint-space count proves the regions the graph lists to be all:
-            # no region hides in an uncertified node, and no flow is needed for that
-            n, n_post = self.table.status.shape
-            #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1)
-            self.open_nodes = np.zeros((2, n, n_post), dtype=bool)
-            if saved is not None:
-                self._flow_table(leaves, None, saved)
-        else:
-            self._attach(leaves, None if flows_of is None else flows_of, saved)
+        #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1), where a region might hide
+        self.open_nodes = np.zeros((2, *self.table.status.shape), dtype=bool)
+        if not self._listed_are_all():
+            self._attach(leaves, flows_of, saved)
+        elif saved is not None:
+            # the joint-space count proves the regions the graph lists to be all: no
+            # region hides in an uncertified node, and no flow is needed for that;
+            # a saved analysis's flows are kept for saving it again
+            self._flow_table(leaves, None, saved)
         self._resolve()
 
     #: what a refined analysis takes from the analysis it refines (see
@@ -1050,12 +1049,16 @@ class Analysis:
         joint = self.joint_count
         if joint is None or joint.at_most is None:
             return False
-        g, t = self.graph, self.table
-        listed = 0
-        for row, s in enumerate((1, -1)):
-            mask = (g.certain >= 0) & (t.sign == s)
-            listed += np.unique(g.possible[row][:, :: g.slots][mask]).size
+        listed = sum(np.unique(self._certified_possible(row)[1]).size for row in (0, 1))
         return listed == joint.at_most
+
+    def _certified_possible(self, row: int) -> tuple[NDArray[np.bool_], NDArray[np.int64]]:
+        """The certified nodes of sign row ``row`` (a mask (n, P)) and the possible
+        component of each: that of its first sub-node (a certified node lies within
+        the limits: one piece)."""
+        g, t = self.graph, self.table
+        mask = (g.certain >= 0) & (t.sign == (1, -1)[row])
+        return mask, g.possible[row][:, :: g.slots][mask]
 
     def _flow_table(
         self,
@@ -1144,10 +1147,7 @@ class Analysis:
         The flows along the pose axes are tried first, on every node; the other
         flows only on the nodes those leave open (see :meth:`_attached`)."""
         done = self._flow_table(leaves, reuse, saved)
-        n, n_post = self.table.status.shape
         attached = self._attached(done, (0, 1), leaves=leaves)
-        #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1)
-        self.open_nodes = np.zeros((2, n, n_post), dtype=bool)
         for row in (0, 1):
             self.open_nodes[row] = ~done[row] & ~attached[row]
 
@@ -1270,10 +1270,9 @@ class Analysis:
         n_post = t.status.shape[1]
         # certain component -> possible component of its sign
         self._certain_to_possible = np.full(g.certain_sign.size, -1, dtype=np.int64)
-        for row, s in enumerate((1, -1)):
-            mask = (g.certain >= 0) & (t.sign == s)
-            # a certified node lies within the limits: one piece, its first sub-node
-            self._certain_to_possible[g.certain[mask]] = g.possible[row][:, :: g.slots][mask]
+        for row in (0, 1):
+            mask, possible = self._certified_possible(row)
+            self._certain_to_possible[g.certain[mask]] = possible
         # each possible component holding certified parts is one region (distinct
         # possible components hold distinct regions); its largest certified part
         # represents it, the others may or may not belong to it

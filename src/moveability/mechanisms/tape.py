@@ -613,6 +613,31 @@ def _falsi_point(
     return 0.5 * (c + o)
 
 
+@kernel(inline=True)
+def _bracket_step(
+    c: float, o: float, fc: float, fo: float, last: int, slow: int, m: float, value: float,
+    certified: bool,
+) -> tuple[float, float, float, float, int, int]:  # pragma: no cover - compiled  # fmt: skip
+    """``constraint_leg._Bracket.update`` of one bracket after the point ``m``,
+    ``value`` deciding its side there (``certified``: on the bound's side): the new
+    ``(c, o, fc, fo, last, slow)``, the same floats."""
+    before = abs(o - c)
+    if certified:
+        if last == 1:
+            fo = 0.5 * fo  # the Illinois step: an end moved twice halves the other's value
+        c = m
+        fc = value
+        last = 1
+    else:
+        if last == -1:
+            fc = 0.5 * fc
+        o = m
+        fo = value
+        last = -1
+    slow = slow + 1 if abs(o - c) > 0.5 * before else 0
+    return c, o, fc, fo, last, slow
+
+
 @kernel
 def _contract(
     code: NDArray[np.int64],
@@ -726,40 +751,18 @@ def _contract(
                 e1 = col1[t]
                 e2 = col2[t]
                 up = sign[i] > 0
-                # constraint_leg._Bracket.update of each bracket (written out: a
-                # helper taking the arrays, called per run, costs more than this)
-                m1 = point[e1]
+                # each bracket after its point: below the root a point is certified
+                # where F is certainly on the side below it (phi < 0), above where psi > 0
                 phi = r_hi[out, e1] if up else -r_lo[out, e1]
-                before = abs(b_o[i] - b_c[i])
-                if -phi > 0:
-                    if b_last[i] == 1:
-                        b_fo[i] = 0.5 * b_fo[i]
-                    b_c[i] = m1
-                    b_fc[i] = phi
-                    b_last[i] = 1
-                else:
-                    if b_last[i] == -1:
-                        b_fc[i] = 0.5 * b_fc[i]
-                    b_o[i] = m1
-                    b_fo[i] = phi
-                    b_last[i] = -1
-                b_slow[i] = b_slow[i] + 1 if abs(b_o[i] - b_c[i]) > 0.5 * before else 0
-                m2 = point[e2]
+                b_c[i], b_o[i], b_fc[i], b_fo[i], b_last[i], b_slow[i] = _bracket_step(
+                    b_c[i], b_o[i], b_fc[i], b_fo[i], b_last[i], b_slow[i], point[e1], phi,
+                    -phi > 0,
+                )  # fmt: skip
                 psi = r_lo[out, e2] if up else -r_hi[out, e2]
-                before = abs(a_o[i] - a_c[i])
-                if psi > 0:
-                    if a_last[i] == 1:
-                        a_fo[i] = 0.5 * a_fo[i]
-                    a_c[i] = m2
-                    a_fc[i] = psi
-                    a_last[i] = 1
-                else:
-                    if a_last[i] == -1:
-                        a_fc[i] = 0.5 * a_fc[i]
-                    a_o[i] = m2
-                    a_fo[i] = psi
-                    a_last[i] = -1
-                a_slow[i] = a_slow[i] + 1 if abs(a_o[i] - a_c[i]) > 0.5 * before else 0
+                a_c[i], a_o[i], a_fc[i], a_fo[i], a_last[i], a_slow[i] = _bracket_step(
+                    a_c[i], a_o[i], a_fc[i], a_fo[i], a_last[i], a_slow[i], point[e2], psi,
+                    psi > 0,
+                )  # fmt: skip
 
 
 def contract(
