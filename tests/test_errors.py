@@ -554,9 +554,9 @@ def test_precision_too_fine_for_the_memory_available(monkeypatch):
     classified = []
     classify = result_module.classify_sheets
 
-    def counting(mechanism, lo, hi):
+    def counting(mechanism, lo, hi, **options):
         classified.append(len(lo))
-        return classify(mechanism, lo, hi)
+        return classify(mechanism, lo, hi, **options)
 
     monkeypatch.setattr(result_module, "classify_sheets", counting)
     with raises(ResolutionError, "precision", "memory", f"max_leaves={budget}"):

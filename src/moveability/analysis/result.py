@@ -268,9 +268,16 @@ def analyze(
     # the sheet tables of the cells that may end as leaves: the analysis reuses
     # them rather than classifying the final leaves again
     kept: list[tuple[NDArray[np.float64], NDArray[np.float64], SheetTable]] = []
+    # legs whose fold certificates can be left out where a cell is split anyway
+    lazy_folds = any(getattr(leg, "folds_optional", False) for leg in mechanism.legs)
 
     def classify(cell_lo: NDArray[np.float64], cell_hi: NDArray[np.float64]) -> NDArray[np.uint8]:
-        table = classify_sheets(mechanism, cell_lo, cell_hi)
+        # the build classifies one level a call, from level 0. Above the last
+        # level the undecided cells are split, and the fold certificates decide
+        # no status: they are left out there. A cell that stays there is IN (no
+        # leg folds) or OUT (its fold groups are empty whatever its legs' codes)
+        folds = not lazy_folds or len(kept) >= n_levels
+        table = classify_sheets(mechanism, cell_lo, cell_hi, folds=folds)
         statuses = table.statuses()
         if kept:
             # a later level came: the undecided cells of the last one were split

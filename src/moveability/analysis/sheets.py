@@ -43,7 +43,8 @@ class SheetTable:
     Attributes
     ----------
     leg_status : (n, n_legs) uint8
-        Reach code of each leg.
+        Reach code of each leg. A leg that may fold is ``REACH_UNKNOWN`` where
+        its fold certificates were not tried (``classify_sheets(folds=False)``).
     status : (n, P) uint8
         IN / OUT / BOUNDARY of each posture sheet.
     sign : (n, P) int8
@@ -151,12 +152,19 @@ def _rows_count(a: NDArray[np.bool_]) -> NDArray[np.int64]:
     return out
 
 
-def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
-    """Certify the posture sheets of ``mechanism`` over boxes ``[lo, hi]`` (n, k)."""
+def classify_sheets(
+    mechanism: Mechanism, lo: Array, hi: Array, *, folds: bool = True
+) -> SheetTable:
+    """Certify the posture sheets of ``mechanism`` over boxes ``[lo, hi]`` (n, k).
+
+    ``folds=False`` lets the legs whose fold certificates are optional skip them
+    (:meth:`~moveability.mechanisms.base.Mechanism.reaches_and_det`): the
+    statuses are the same, the fold groups and fold codes of the table are not
+    certified (for boxes about to be split)."""
     legs = mechanism.legs
     n = lo.shape[0]
     # det A too where it depends on the pose alone (computed with the reaches)
-    reaches, pose_det = mechanism.reaches_and_det(lo, hi)
+    reaches, pose_det = mechanism.reaches_and_det(lo, hi, folds=folds)
     leg_status = np.stack([r.status for r in reaches], axis=1).astype(np.uint8)
     postures = mechanism.postures
     n_post = postures.shape[0]
@@ -176,8 +184,8 @@ def classify_sheets(mechanism: Mechanism, lo: Array, hi: Array) -> SheetTable:
     any_out = _rows_any(leg_status == REACH_OUT)
     any_unknown = _rows_any(leg_status == REACH_UNKNOWN)
     # the legs that fold in some box (a leg that folds in none joins no group)
-    folds = folding.any(axis=0)
-    fold_legs = [i for i in range(len(legs)) if folds[i]]
+    leg_folds = folding.any(axis=0)
+    fold_legs = [i for i in range(len(legs)) if leg_folds[i]]
     any_fold = _rows_any(folding)
 
     # geometry: the configurations of the folding legs over the box all join

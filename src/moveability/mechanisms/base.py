@@ -25,7 +25,7 @@ import copy
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Protocol, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -712,12 +712,26 @@ class Mechanism:
             out.append(self.det_a_boxes(lo, hi, angles, posture=p))  # type: ignore[arg-type]
         return out
 
-    def reaches_and_det(self, lo: Array, hi: Array) -> tuple[list[LegReach], Interval | None]:
+    def reaches_and_det(
+        self, lo: Array, hi: Array, *, folds: bool = True
+    ) -> tuple[list[LegReach], Interval | None]:
         """Each leg's reach over boxes of poses and, for a mechanism whose det A
         depends on the pose alone (whatever the posture and the joint angles), its
         enclosure as :meth:`det_a_boxes` gives it, computed together. Here each
-        leg's ``reach`` and None: det A comes from :meth:`det_a_boxes` per posture."""
-        return [leg.reach(lo, hi) for leg in self.legs], None
+        leg's ``reach`` and None: det A comes from :meth:`det_a_boxes` per posture.
+
+        ``folds=False``: a leg whose fold certificates are optional (its
+        ``folds_optional``) skips them; where the leg's branches do not come from
+        its fold status (no ``branches_at_folds``), the boxes' tree statuses do
+        not change."""
+        return [
+            cast(Any, leg).reach(lo, hi, folds=False)
+            if not folds
+            and getattr(leg, "folds_optional", False)
+            and not getattr(leg, "branches_at_folds", False)
+            else leg.reach(lo, hi)
+            for leg in self.legs
+        ], None
 
     def identically_singular(self, posture: int) -> bool:
         """Whether det A vanishes on every configuration of a posture (it then holds

@@ -202,6 +202,8 @@ class ConstraintLeg:
     _range: tuple[float, float] = field(init=False, repr=False)
 
     n_branches = 2
+    #: ``reach(lo, hi, folds=False)`` skips the fold certificates (see :meth:`reach`)
+    folds_optional = True
 
     def __post_init__(self) -> None:
         if self.prismatic:
@@ -574,13 +576,19 @@ class ConstraintLeg:
         np.logical_and.at(finite, run, pieces.finite)
         return _Runs(pieces, run, run_box, start, end, mono, finite)
 
-    def reach(self, lo: Array, hi: Array) -> LegReach:
-        """Reach code, branch enclosures and fold certificates over boxes ``[lo, hi]`` (n, k)."""
+    def reach(self, lo: Array, hi: Array, *, folds: bool = True) -> LegReach:
+        """Reach code, branch enclosures and fold certificates over boxes ``[lo, hi]`` (n, k).
+
+        With ``folds=False`` the fold certificates are not tried: a box where the
+        leg may fold is ``REACH_UNKNOWN`` rather than ``FOLD_OUTER`` or
+        ``FOLD_INNER``, and ``fold_connected`` is False. Either status folds, so
+        a box's tree status is the same; a subdivision asks so for the cells it
+        splits anyway."""
         lo = np.asarray(lo, dtype=np.float64)
         hi = np.asarray(hi, dtype=np.float64)
         # derived inputs of the pose (sin and cos of an angle, ...) once per box
         with tape.remembered_boxes():
-            return self._reach(lo, hi)
+            return self._reach(lo, hi, folds)
 
     def _root_pieces(self, lo: Array, hi: Array) -> _Pieces:
         """The pieces of :meth:`_isolate`, less those over which ``F`` is monotone
@@ -621,7 +629,7 @@ class ConstraintLeg:
             runs, f_start, f_end = runs.take(keep), f_start[keep], f_end[keep]
         return runs, f_start, f_end
 
-    def _reach(self, lo: Array, hi: Array) -> LegReach:
+    def _reach(self, lo: Array, hi: Array, folds: bool = True) -> LegReach:
         n = lo.shape[0]
         runs, f_start, f_end = self._root_runs(lo, hi)
         n_runs = np.bincount(runs.box, minlength=n)
@@ -672,6 +680,7 @@ class ConstraintLeg:
             r = run_of_box[single]
             hull.lo[single] = runs.start[r]
             hull.hi[single] = runs.end.hi[r]
+        if single.size and folds:
             ends = (f_start[r], f_end[r])
             convexity, connected = self._fold(lo, hi, runs, single, r, ends)
             fold = (convexity != 0) & (status[single] == REACH_UNKNOWN)

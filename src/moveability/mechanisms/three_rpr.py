@@ -373,11 +373,13 @@ class ThreeRPR(Mechanism):
         kernels.det_a_bounds(*boxes, self._leg_geometry, out_lo, out_hi)
         return Interval(out_lo, out_hi)
 
-    def reaches_and_det(self, lo: Array, hi: Array) -> tuple[list[LegReach], Interval | None]:
+    def reaches_and_det(
+        self, lo: Array, hi: Array, *, folds: bool = True
+    ) -> tuple[list[LegReach], Interval | None]:
         """The legs' reaches and det A over boxes (det A depends on the pose alone) in
         one compiled pass (:func:`._rpr_kernels.pose_bounds`: the cosine and sine of
         phi once for all): the bounds of :meth:`RPRLeg.reach` and :meth:`det_a_boxes`,
-        bit for bit.
+        bit for bit. The legs' folds cost nothing apart: ``folds`` is not used.
 
         Examples
         --------
