@@ -678,8 +678,9 @@ class ConstraintLeg:
             run_of_box = np.full(n, -1, dtype=np.intp)
             run_of_box[runs.box] = np.arange(runs.box.size)
             r = run_of_box[single]
-            hull.lo[single] = runs.start[r]
-            hull.hi[single] = runs.end.hi[r]
+            hull.lo[single], hull.hi[single] = self._hull_ends(
+                lo, hi, runs, r, (f_start[r], f_end[r])
+            )
         if single.size and folds:
             ends = (f_start[r], f_end[r])
             convexity, connected = self._fold(lo, hi, runs, single, r, ends)
@@ -688,6 +689,66 @@ class ConstraintLeg:
             status[single[fold & (convexity < 0)]] = FOLD_INNER
             fold_connected[single] = fold & connected
         return LegReach(status=status, branches=branches, hull=hull, fold_connected=fold_connected)
+
+    def _hull_ends(
+        self,
+        lo: Array,
+        hi: Array,
+        runs: _Runs,
+        r: NDArray[np.intp],
+        ends: tuple[Interval, Interval],
+    ) -> tuple[Array, Array]:
+        """The bounds of the roots over the boxes of the runs ``r`` (one run a box;
+        ``ends``: ``F`` at their starts and ends): the run's ends, moved in where
+        its first (last) piece is monotone in ``q`` for every pose of the box and
+        ``F`` at the run's start (end) is certified on the side before (after) a
+        root.
+
+        A point of that piece where ``F`` is certified on that side lies before
+        (after) every root of the box in the piece, and the run's other pieces
+        come after (before) it: the piece's contraction (:meth:`_contract`, its
+        bracket on that side, whose points are each certified) moves the end to
+        the last such point found. A fold's run keeps wide monotone pieces at its ends
+        (the isolation stops at monotone pieces), which would widen the hull by
+        up to their width."""
+        start = runs.start[r].copy()
+        end = runs.end.hi[r].copy()
+        pieces = runs.pieces
+        run = runs.run_of_piece
+        # a run unwrapped across the circle's cut holds pieces after the cut (their
+        # q below its start) that come last, one turn on
+        after = pieces.lo < runs.start[run]
+        turn = np.where(after, 4.0 * np.pi, 0.0)
+        first = _last_by(run, -(pieces.lo + turn), runs.box.size)
+        last = _last_by(run, pieces.hi + turn, runs.box.size)
+        for side, f in ((-1, ends[0]), (1, ends[1])):
+            at = (first if side < 0 else last)[r]
+            ok = at >= 0
+            at = np.where(ok, at, 0)
+            mono = pieces.mono[at]
+            ok &= pieces.finite[at] & (mono != 0) & _on_side(mono.astype(np.float64), side, f)
+            idx = np.flatnonzero(ok)
+            if not idx.size:
+                continue
+            # the end piece as a run of its own: its bound on the run's side moved in
+            # by the contraction (its other bound, not certified, is not used)
+            p_lo, p_hi = pieces.lo[at[idx]], pieces.hi[at[idx]]
+            box = runs.box[r[idx]]
+            own = _Runs(
+                pieces, run, box, p_lo.copy(), Interval(p_hi.copy()), mono[idx],
+                np.ones(idx.size, dtype=bool),
+            )  # fmt: skip
+            f_lo = self._box_eval(self.f, lo, hi, box, ex.points(p_lo))
+            f_hi = self._box_eval(self.f, lo, hi, box, ex.points(p_hi))
+            below, above = self._contract(lo, hi, own, np.arange(idx.size), (f_lo, f_hi))
+            if side < 0:
+                start[idx] = below
+            else:
+                c = above.copy()
+                wrapped = after[at[idx]]
+                c[wrapped] = (Interval(c[wrapped]) + _TWO_PI).hi
+                end[idx] = c
+        return start, end
 
     def _contract(
         self,
@@ -1169,6 +1230,32 @@ class _Bracket:
         self.c[at], self.o[at], self.fc[at], self.fo[at] = c, o, fc, fo
         self.last[at] = np.where(certified, 1, -1)
         self.slow[at] = np.where(np.abs(o - c) > 0.5 * before, self.slow[at] + 1, 0)
+
+
+def _last_by(group: NDArray[np.intp], key: Array, n: int) -> NDArray[np.intp]:
+    """For each group ``0 .. n - 1``, the index of its element of largest ``key``
+    (-1 for an empty group).
+
+    Examples
+    --------
+    >>> _last_by(np.array([0, 1, 0, 0]), np.array([3.0, 1.0, 5.0, 4.0]), 3).tolist()
+    [2, 1, -1]
+    """
+    out = np.full(n, -1, dtype=np.intp)
+    order = np.lexsort((key, group))
+    g = group[order]
+    ends = np.ones(g.size, dtype=bool)
+    ends[:-1] = g[1:] != g[:-1]  # the last element of each group, in that order
+    out[g[ends]] = order[ends]
+    return out
+
+
+def _on_side(mono: Array, side: int, f: Interval) -> NDArray[np.bool_]:
+    """Where ``F`` (enclosures ``f``) is certified before (``side`` -1) or after
+    (+1) every root of ``F`` monotone in the joint with sign ``mono``: ``side *
+    mono * F > 0`` over the whole enclosure (False where NaN)."""
+    with _quiet():
+        return np.where(side * mono > 0, f.lo > 0, f.hi < 0)
 
 
 def _as_iv(value: Any, n: int) -> Interval:
