@@ -715,15 +715,20 @@ class ConstraintLeg:
         end = runs.end.hi[r].copy()
         pieces = runs.pieces
         run = runs.run_of_piece
-        # a run unwrapped across the circle's cut holds pieces after the cut (their
-        # q below its start) that come last, one turn on
+        # a box of one run: its pieces are the run's, in q order. A run unwrapped
+        # across the circle's cut starts with pieces after the cut (their q below
+        # its start), which come last, one turn on
         after = pieces.lo < runs.start[run]
-        turn = np.where(after, 4.0 * np.pi, 0.0)
-        first = _last_by(run, -(pieces.lo + turn), runs.box.size)
-        last = _last_by(run, pieces.hi + turn, runs.box.size)
+        box_r = runs.box[r]
+        begin = np.searchsorted(pieces.box, box_r)
+        stop = np.searchsorted(pieces.box, box_r, side="right")
+        counted = np.concatenate([[0], np.cumsum(after)])
+        n_after = counted[stop] - counted[begin]
+        first = begin + n_after
+        last = np.where(n_after > 0, begin + n_after - 1, stop - 1)
         for side, f in ((-1, ends[0]), (1, ends[1])):
-            at = (first if side < 0 else last)[r]
-            ok = at >= 0
+            at = first if side < 0 else last
+            ok = (at >= begin) & (at < stop)
             at = np.where(ok, at, 0)
             mono = pieces.mono[at]
             ok &= pieces.finite[at] & (mono != 0) & _on_side(mono.astype(np.float64), side, f)
@@ -1230,24 +1235,6 @@ class _Bracket:
         self.c[at], self.o[at], self.fc[at], self.fo[at] = c, o, fc, fo
         self.last[at] = np.where(certified, 1, -1)
         self.slow[at] = np.where(np.abs(o - c) > 0.5 * before, self.slow[at] + 1, 0)
-
-
-def _last_by(group: NDArray[np.intp], key: Array, n: int) -> NDArray[np.intp]:
-    """For each group ``0 .. n - 1``, the index of its element of largest ``key``
-    (-1 for an empty group).
-
-    Examples
-    --------
-    >>> _last_by(np.array([0, 1, 0, 0]), np.array([3.0, 1.0, 5.0, 4.0]), 3).tolist()
-    [2, 1, -1]
-    """
-    out = np.full(n, -1, dtype=np.intp)
-    order = np.lexsort((key, group))
-    g = group[order]
-    ends = np.ones(g.size, dtype=bool)
-    ends[:-1] = g[1:] != g[:-1]  # the last element of each group, in that order
-    out[g[ends]] = order[ends]
-    return out
 
 
 def _on_side(mono: Array, side: int, f: Interval) -> NDArray[np.bool_]:
