@@ -298,6 +298,37 @@ def test_prismatic_leg_with_one_root_in_its_stroke():
     assert np.allclose(leg.angles(np.array([[6.2, 0.3]]))[0, 1], q)
 
 
+def test_prismatic_hulls_hold_the_root():
+    """A prismatic leg's cells of one run (F = x^2 + y^2 - q^2, stroke [5, 10],
+    searched over [3.75, 11.25]): the hull holds the root q = |P| of every
+    sampled pose, also where the run meets the end of the search range."""
+    leg = ConstraintLeg(
+        "d",
+        f=lambda x, y, q: x * x + y * y - q**2,
+        df_dq=lambda x, y, q: -2 * q,
+        d2f_dq2=lambda x, y, q: -2 + 0 * q,
+        df_dx=(lambda x, y, q: 2 * x + 0 * q, lambda x, y, q: 2 * y + 0 * q),
+        prismatic=True,
+        stroke=(5.0, 10.0),
+    )
+    rng = np.random.default_rng(12)
+    n = 3000
+    theta = rng.uniform(-np.pi, np.pi, n)
+    radius = rng.choice([3.75, 11.25, 7.0], n) + rng.normal(0.0, 0.3, n)
+    centre = np.stack([radius * np.cos(theta), radius * np.sin(theta)], axis=1)
+    half = 10.0 ** rng.uniform(-4, -0.5, (n, 1)) * np.ones((1, 2))
+    lo, hi = centre - half, centre + half
+    reach = leg.reach(lo, hi)
+    one = np.flatnonzero(np.isfinite(reach.hull.lo) & np.isfinite(reach.hull.hi))
+    assert one.size > 100
+    u = rng.uniform(0.0, 1.0, (one.size, 30, 2))
+    u[:, :4] = [[0, 0], [0, 1], [1, 0], [1, 1]]
+    root = np.hypot(*np.moveaxis(lo[one, None, :] + u * (hi - lo)[one, None, :], -1, 0))
+    inside = (root >= 3.75) & (root <= 11.25)
+    held = (root >= reach.hull.lo[one, None]) & (root <= reach.hull.hi[one, None])
+    assert held[inside].all()
+
+
 @settings(deadline=None, max_examples=60)
 @given(
     st.floats(-12, 12),
