@@ -37,6 +37,19 @@ def five_bar_leg(a: float = A, b: float = B) -> ConstraintLeg:
     )
 
 
+def actuator_leg() -> ConstraintLeg:
+    """A linear actuator from the origin: F = x^2 + y^2 - q^2, stroke [5, 10]."""
+    return ConstraintLeg(
+        "d",
+        f=lambda x, y, q: x * x + y * y - q**2,
+        df_dq=lambda x, y, q: -2 * q,
+        d2f_dq2=lambda x, y, q: -2 + 0 * q,
+        df_dx=(lambda x, y, q: 2 * x + 0 * q, lambda x, y, q: 2 * y + 0 * q),
+        prismatic=True,
+        stroke=(5.0, 10.0),
+    )
+
+
 def _in(enclosure_lo, enclosure_hi, q, tol=1e-9):
     """Whether angle q lies in [lo, hi] modulo 2 pi."""
     k = np.floor((q - enclosure_lo) / (2 * np.pi))
@@ -277,16 +290,7 @@ def test_point_boxes_near_the_fold_and_clip():
 
 
 def test_prismatic_leg_with_one_root_in_its_stroke():
-    # a linear actuator from the origin: F = x^2 + y^2 - q^2, stroke [5, 10]
-    leg = ConstraintLeg(
-        "d",
-        f=lambda x, y, q: x * x + y * y - q**2,
-        df_dq=lambda x, y, q: -2 * q,
-        d2f_dq2=lambda x, y, q: -2 + 0 * q,
-        df_dx=(lambda x, y, q: 2 * x + 0 * q, lambda x, y, q: 2 * y + 0 * q),
-        prismatic=True,
-        stroke=(5.0, 10.0),
-    )
+    leg = actuator_leg()
     lo = np.array([[6.0, 0.0], [20.0, 0.0]])
     hi = np.array([[6.5, 0.5], [21.0, 1.0]])
     reach = leg.reach(lo, hi)
@@ -302,15 +306,7 @@ def test_prismatic_hulls_hold_the_root():
     """A prismatic leg's cells of one run (F = x^2 + y^2 - q^2, stroke [5, 10],
     searched over [3.75, 11.25]): the hull holds the root q = |P| of every
     sampled pose, also where the run meets the end of the search range."""
-    leg = ConstraintLeg(
-        "d",
-        f=lambda x, y, q: x * x + y * y - q**2,
-        df_dq=lambda x, y, q: -2 * q,
-        d2f_dq2=lambda x, y, q: -2 + 0 * q,
-        df_dx=(lambda x, y, q: 2 * x + 0 * q, lambda x, y, q: 2 * y + 0 * q),
-        prismatic=True,
-        stroke=(5.0, 10.0),
-    )
+    leg = actuator_leg()
     rng = np.random.default_rng(12)
     n = 3000
     theta = rng.uniform(-np.pi, np.pi, n)
