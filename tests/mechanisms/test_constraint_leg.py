@@ -50,6 +50,14 @@ def actuator_leg() -> ConstraintLeg:
     )
 
 
+def _square_boxes(rng, radius, theta, exponents):
+    """Square boxes centred at the polar points (radius, theta), their half-widths
+    10^u with u uniform in ``exponents``."""
+    centre = np.stack([radius * np.cos(theta), radius * np.sin(theta)], axis=1)
+    half = 10.0 ** rng.uniform(*exponents, (radius.size, 1)) * np.ones((1, 2))
+    return centre - half, centre + half
+
+
 def _in(enclosure_lo, enclosure_hi, q, tol=1e-9):
     """Whether angle q lies in [lo, hi] modulo 2 pi."""
     k = np.floor((q - enclosure_lo) / (2 * np.pi))
@@ -133,9 +141,7 @@ def test_fold_boxes_hold_a_corner_on_each_side_of_the_reach(a, b):
     n = 3000
     theta = rng.uniform(-np.pi, np.pi, n)
     radius = np.where(rng.uniform(size=n) < 0.5, a + b, abs(a - b)) + rng.uniform(-0.1, 0.1, n)
-    centre = np.stack([radius * np.cos(theta), radius * np.sin(theta)], axis=1)
-    half = 10.0 ** rng.uniform(-4, -0.5, (n, 1)) * np.ones((1, 2))
-    lo, hi = centre - half, centre + half
+    lo, hi = _square_boxes(rng, radius, theta, (-4, -0.5))
     status = leg.reach(lo, hi).status
     fold = np.flatnonzero((status == FOLD_OUTER) | (status == FOLD_INNER))
     assert fold.size > 300
@@ -161,9 +167,7 @@ def test_fold_hulls_hold_every_root_and_are_tight(a, b):
     theta = np.where(rng.uniform(size=n) < 0.4, np.pi + rng.normal(0.0, 0.05, n),
                      rng.uniform(-np.pi, np.pi, n))  # fmt: skip
     radius = np.where(rng.uniform(size=n) < 0.5, a + b, abs(a - b)) + rng.uniform(-0.05, 0.05, n)
-    centre = np.stack([radius * np.cos(theta), radius * np.sin(theta)], axis=1)
-    half = 10.0 ** rng.uniform(-4, -1, (n, 1)) * np.ones((1, 2))
-    lo, hi = centre - half, centre + half
+    lo, hi = _square_boxes(rng, radius, theta, (-4, -1))
     reach = leg.reach(lo, hi)
     one = np.flatnonzero(np.isfinite(reach.hull.lo) & np.isfinite(reach.hull.hi))
     assert one.size > 1000
@@ -311,9 +315,7 @@ def test_prismatic_hulls_hold_the_root():
     n = 3000
     theta = rng.uniform(-np.pi, np.pi, n)
     radius = rng.choice([3.75, 11.25, 7.0], n) + rng.normal(0.0, 0.3, n)
-    centre = np.stack([radius * np.cos(theta), radius * np.sin(theta)], axis=1)
-    half = 10.0 ** rng.uniform(-4, -0.5, (n, 1)) * np.ones((1, 2))
-    lo, hi = centre - half, centre + half
+    lo, hi = _square_boxes(rng, radius, theta, (-4, -0.5))
     reach = leg.reach(lo, hi)
     one = np.flatnonzero(np.isfinite(reach.hull.lo) & np.isfinite(reach.hull.hi))
     assert one.size > 100
