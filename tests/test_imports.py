@@ -40,6 +40,32 @@ def test_version_imports_neither_the_analysis_nor_heavy_packages():
     assert not models(modules)
 
 
+COMMANDS = ("analyze", "export", "feasible", "locate", "plan", "plot", "regions", "report", "sweep")
+
+
+def commands(modules: set[str]) -> set[str]:
+    return {c for c in COMMANDS if f"moveability.cli.{c}" in modules}
+
+
+def test_a_command_imports_its_own_module_alone():
+    version = imported_after(
+        "from moveability.cli import main\n"
+        "try:\n    main(['--version'])\nexcept SystemExit:\n    pass"
+    )
+    assert commands(version) == set()
+    regions = imported_after(
+        "from moveability.cli import main\n"
+        f"try:\n    main(['regions', {str(EXAMPLES / 'five-bar-paper.toml')!r}, '-p', '1'])\n"
+        "except SystemExit:\n    pass"
+    )
+    assert commands(regions) == {"regions"}
+    # the help lists every command, importing each
+    listed = imported_after(
+        "from moveability.cli import main\ntry:\n    main(['--help'])\nexcept SystemExit:\n    pass"
+    )
+    assert commands(listed) == set(COMMANDS)
+
+
 @pytest.mark.parametrize(
     ("name", "module"),
     [("FiveBar", "five_bar"), ("ThreeRPR", "three_rpr"), ("Delta", "delta")],

@@ -28,26 +28,44 @@ import os
 # machine. A value the user set is kept.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+import importlib
+
 import click
 
 from .. import __version__
 from . import process, running
-from .analyze import analyze_command
-from .export import export_command
-from .feasible import feasible_command
-from .locate import locate_command
-from .plan import plan_command
-from .plot import plot_command
-from .regions import regions_command
-from .report import report_command
-from .sweep import sweep_command
 
 __all__ = ["main", "run"]
+
+#: each command's module and function: a command's module is imported when the
+#: command runs (or the help lists it), so a command imports only its own
+_COMMANDS = {
+    "analyze": ("analyze", "analyze_command"),
+    "export": ("export", "export_command"),
+    "feasible": ("feasible", "feasible_command"),
+    "locate": ("locate", "locate_command"),
+    "plan": ("plan", "plan_command"),
+    "plot": ("plot", "plot_command"),
+    "regions": ("regions", "regions_command"),
+    "report": ("report", "report_command"),
+    "sweep": ("sweep", "sweep_command"),
+}
 
 
 class _Commands(click.Group):
     """The command group: the library's errors, wherever raised (an option's value
-    included), become one line on stderr (:func:`.running.reporting_errors`)."""
+    included), become one line on stderr (:func:`.running.reporting_errors`); the
+    commands' modules are imported on demand (``_COMMANDS``)."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(_COMMANDS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name not in _COMMANDS:
+            return None
+        module, name = _COMMANDS[cmd_name]
+        command: click.Command = getattr(importlib.import_module(f".{module}", __name__), name)
+        return command
 
     def invoke(self, ctx: click.Context) -> object:
         with running.reporting_errors():
@@ -63,17 +81,6 @@ def main(ctx: click.Context, verbose: int, quiet: int) -> None:
     """Regions of feasible point-to-point motions of fully-parallel manipulators."""
     ctx.obj = {"verbosity": verbose - quiet}
     running.configure_logging(verbose - quiet)
-
-
-main.add_command(analyze_command)
-main.add_command(regions_command)
-main.add_command(locate_command)
-main.add_command(feasible_command)
-main.add_command(plan_command)
-main.add_command(plot_command)
-main.add_command(report_command)
-main.add_command(export_command)
-main.add_command(sweep_command)
 
 
 def run() -> None:
