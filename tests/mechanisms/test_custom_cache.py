@@ -60,7 +60,9 @@ def test_cached_spec_needs_no_sympy(cache) -> None:
     code = (
         "import sys; from moveability import analyze; "
         f"r = analyze({SPEC!r}, precision=0.5); "
-        "assert 'sympy' not in sys.modules, 'sympy imported'; print(r.to_dict()['leaves'])"
+        "assert 'sympy' not in sys.modules, 'sympy imported'; "
+        "assert 'importlib.metadata' not in sys.modules, 'importlib.metadata imported'; "
+        "print(r.to_dict()['leaves'])"
     )
     env = {**os.environ, "MOVEABILITY_CACHE_DIR": str(cache)}
     done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
@@ -130,3 +132,27 @@ def test_no_cache_when_disabled(tmp_path, monkeypatch) -> None:
     monkeypatch.chdir(tmp_path)
     CustomMechanism(load_spec(os.path.join(os.path.dirname(__file__), "..", "..", SPEC)))
     assert not list(tmp_path.iterdir())
+
+
+def test_the_cache_key_follows_sympy_s_release(tmp_path, monkeypatch) -> None:
+    """The key of a cached spec depends on sympy's release file (read, not
+    imported): another release of sympy builds the spec again."""
+    import importlib.util
+
+    real = importlib.util.find_spec("sympy")
+    assert real is not None and real.origin is not None
+    custom._fingerprint.cache_clear()
+    before = custom._fingerprint()
+    other = tmp_path / "sympy"
+    other.mkdir()
+    (other / "__init__.py").write_text("")
+    (other / "release.py").write_text('__version__ = "0.0.1"\n')
+    spec = importlib.util.spec_from_file_location("sympy", other / "__init__.py")
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: spec)
+    custom._fingerprint.cache_clear()
+    try:
+        assert custom._fingerprint() != before
+    finally:
+        monkeypatch.undo()
+        custom._fingerprint.cache_clear()
+    assert custom._fingerprint() == before

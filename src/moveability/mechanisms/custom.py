@@ -839,17 +839,19 @@ def _cache_dir() -> str | None:
 @functools.cache
 def _fingerprint() -> str:
     """What the cached results depend on: the source of this module and of
-    :mod:`moveability.spec` (angles as ``"pi/2"``), and sympy's version."""
-    import importlib.metadata
-
+    :mod:`moveability.spec` (angles as ``"pi/2"``), and sympy's version (its
+    ``release.py``, read rather than imported: neither sympy nor
+    :mod:`importlib.metadata`, a hundredth of a second, is imported for it)."""
     digest = hashlib.sha256()
-    for path in (__file__, os.path.join(os.path.dirname(__file__), "..", "spec.py")):
-        with open(path, "rb") as handle:
-            digest.update(handle.read())
-    try:
-        digest.update(importlib.metadata.version("sympy").encode())
-    except importlib.metadata.PackageNotFoundError:  # pragma: no cover
-        digest.update(b"?")
+    found = importlib.util.find_spec("sympy")
+    origin = found.origin if found is not None else None
+    release = os.path.join(os.path.dirname(origin), "release.py") if origin else None
+    for path in (__file__, os.path.join(os.path.dirname(__file__), "..", "spec.py"), release):
+        try:
+            with open(str(path), "rb") as handle:
+                digest.update(handle.read())
+        except OSError:  # pragma: no cover - no sympy release file: always rebuilt
+            digest.update(os.urandom(16))
     return digest.hexdigest()
 
 
