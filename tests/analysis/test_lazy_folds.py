@@ -1,10 +1,11 @@
 """Fold certificates left out where a subdivision splits the cell anyway.
 
-``classify_sheets(folds=False)`` lets a user-defined leg skip its fold
-certificates: the tree statuses must not change (they decide which cells are
-split), the fold groups may only shrink, and a leg's reach code may only go
-from a fold code to REACH_UNKNOWN. The analysis asks so above the last level;
-its answers must be those of an analysis that certifies every fold.
+``classify_sheets(folds=False)`` lets a leg given by its constraint (the
+user-defined ones, and the 3-RRR's) skip its fold certificates: the tree
+statuses must not change (they decide which cells are split), the fold groups
+may only shrink, and a leg's reach code may only go from a fold code to
+REACH_UNKNOWN. The analysis asks so above the last level; its answers must be
+those of an analysis that certifies every fold.
 """
 
 from __future__ import annotations
@@ -21,7 +22,12 @@ from moveability.mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_UNKNOWN
 from moveability.mechanisms.constraint_leg import ConstraintLeg
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
-SPECS = ["five-bar-custom.toml", "five-bar-custom-passive.toml", "delta-custom.toml"]
+SPECS = [
+    "five-bar-custom.toml",
+    "five-bar-custom-passive.toml",
+    "delta-custom.toml",
+    "three-rrr.toml",
+]
 
 
 def _boxes(mechanism, n, seed):
@@ -56,6 +62,7 @@ def test_statuses_do_not_depend_on_the_fold_certificates(name):
     ("five-bar-custom.toml", 0.1),
     ("five-bar-custom-passive.toml", 0.1),
     ("delta-custom.toml", 0.15),
+    ("three-rrr.toml", 0.5),
 ])  # fmt: skip
 def test_analysis_answers_as_with_every_fold_certified(name, precision, monkeypatch):
     spec = load_spec(EXAMPLES / name)
