@@ -29,15 +29,11 @@ def models(modules: set[str]) -> set[str]:
     return {m for m in MODELS if f"moveability.mechanisms.{m}" in modules}
 
 
-def test_version_imports_neither_the_analysis_nor_heavy_packages():
-    modules = imported_after(
-        "from moveability.cli import main\n"
-        "try:\n    main(['--version'])\nexcept SystemExit:\n    pass"
+def after_command(args: list[str]) -> set[str]:
+    """The modules a fresh interpreter holds after ``moveability`` ran ``args``."""
+    return imported_after(
+        f"from moveability.cli import main\ntry:\n    main({args!r})\nexcept SystemExit:\n    pass"
     )
-    assert "moveability.cli" in modules
-    assert not {m for m in HEAVY if m in modules}
-    assert "moveability.analysis.result" not in modules
-    assert not models(modules)
 
 
 COMMANDS = ("analyze", "export", "feasible", "locate", "plan", "plot", "regions", "report", "sweep")
@@ -47,23 +43,20 @@ def commands(modules: set[str]) -> set[str]:
     return {c for c in COMMANDS if f"moveability.cli.{c}" in modules}
 
 
+def test_version_imports_neither_the_analysis_nor_heavy_packages():
+    modules = after_command(["--version"])
+    assert "moveability.cli" in modules
+    assert not {m for m in HEAVY if m in modules}
+    assert "moveability.analysis.result" not in modules
+    assert not models(modules)
+    assert commands(modules) == set()
+
+
 def test_a_command_imports_its_own_module_alone():
-    version = imported_after(
-        "from moveability.cli import main\n"
-        "try:\n    main(['--version'])\nexcept SystemExit:\n    pass"
-    )
-    assert commands(version) == set()
-    regions = imported_after(
-        "from moveability.cli import main\n"
-        f"try:\n    main(['regions', {str(EXAMPLES / 'five-bar-paper.toml')!r}, '-p', '1'])\n"
-        "except SystemExit:\n    pass"
-    )
+    regions = after_command(["regions", str(EXAMPLES / "five-bar-paper.toml"), "-p", "1"])
     assert commands(regions) == {"regions"}
     # the help lists every command, importing each
-    listed = imported_after(
-        "from moveability.cli import main\ntry:\n    main(['--help'])\nexcept SystemExit:\n    pass"
-    )
-    assert commands(listed) == set(COMMANDS)
+    assert commands(after_command(["--help"])) == set(COMMANDS)
 
 
 @pytest.mark.parametrize(

@@ -721,14 +721,11 @@ class Mechanism:
         leg's ``reach`` and None: det A comes from :meth:`det_a_boxes` per posture.
 
         ``folds=False``: a leg whose fold certificates are optional (its
-        ``folds_optional``) skips them; where the leg's branches do not come from
-        its fold status (no ``branches_at_folds``), the boxes' tree statuses do
-        not change."""
+        ``folds_optional``: they change none of the boxes' tree statuses) skips
+        them."""
         return [
             cast(Any, leg).reach(lo, hi, folds=False)
-            if not folds
-            and getattr(leg, "folds_optional", False)
-            and not getattr(leg, "branches_at_folds", False)
+            if not folds and getattr(leg, "folds_optional", False)
             else leg.reach(lo, hi)
             for leg in self.legs
         ], None

@@ -203,6 +203,8 @@ class ConstraintLeg:
 
     n_branches = 2
     #: ``reach(lo, hi, folds=False)`` skips the fold certificates (see :meth:`reach`)
+    #: and changes no box's tree status: a fold code only names the fold, and the
+    #: branches' enclosures where the leg folds are its hull either way
     folds_optional = True
 
     def __post_init__(self) -> None:
@@ -739,18 +741,27 @@ class ConstraintLeg:
             # by the contraction (its other bound, not certified, is not used)
             p_lo, p_hi = pieces.lo[at[idx]], pieces.hi[at[idx]]
             box = runs.box[r[idx]]
+            wrapped = after[at[idx]]
             own = _Runs(
                 pieces, run, box, p_lo.copy(), Interval(p_hi.copy()), mono[idx],
                 np.ones(idx.size, dtype=bool),
             )  # fmt: skip
-            f_lo = self._box_eval(self.f, lo, hi, box, ex.points(p_lo))
-            f_hi = self._box_eval(self.f, lo, hi, box, ex.points(p_hi))
-            below, above = self._contract(lo, hi, own, np.arange(idx.size), (f_lo, f_hi))
+            # F at the run's end is known (one turn on where the run wraps: F is
+            # then taken at the piece's own end); at the piece's other end, computed
+            known = f[idx]
+            if side < 0:
+                f_ends = (known, self._box_eval(self.f, lo, hi, box, ex.points(p_hi)))
+            else:
+                if wrapped.any():
+                    turn = self._box_eval(self.f, lo, hi, box[wrapped], ex.points(p_hi[wrapped]))
+                    known = Interval(known.lo.copy(), known.hi.copy())
+                    known.lo[wrapped], known.hi[wrapped] = turn.lo, turn.hi
+                f_ends = (self._box_eval(self.f, lo, hi, box, ex.points(p_lo)), known)
+            below, above = self._contract(lo, hi, own, np.arange(idx.size), f_ends)
             if side < 0:
                 start[idx] = below
             else:
                 c = above.copy()
-                wrapped = after[at[idx]]
                 c[wrapped] = (Interval(c[wrapped]) + _TWO_PI).hi
                 end[idx] = c
         return start, end

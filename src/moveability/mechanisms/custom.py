@@ -843,15 +843,20 @@ def _fingerprint() -> str:
     ``release.py``, read rather than imported: neither sympy nor
     :mod:`importlib.metadata`, a hundredth of a second, is imported for it)."""
     digest = hashlib.sha256()
+    for path in (__file__, os.path.join(os.path.dirname(__file__), "..", "spec.py")):
+        with open(path, "rb") as handle:
+            digest.update(handle.read())
     found = importlib.util.find_spec("sympy")
-    origin = found.origin if found is not None else None
-    release = os.path.join(os.path.dirname(origin), "release.py") if origin else None
-    for path in (__file__, os.path.join(os.path.dirname(__file__), "..", "spec.py"), release):
+    origin = None if found is None else found.origin
+    release = b""
+    if origin is not None:
         try:
-            with open(str(path), "rb") as handle:
-                digest.update(handle.read())
-        except OSError:  # pragma: no cover - no sympy release file: always rebuilt
-            digest.update(os.urandom(16))
+            with open(os.path.join(os.path.dirname(origin), "release.py"), "rb") as handle:
+                release = handle.read()
+        except OSError:  # pragma: no cover
+            pass
+    # without sympy's release file, a key no later process meets: nothing is reused
+    digest.update(release or os.urandom(16))
     return digest.hexdigest()
 
 
