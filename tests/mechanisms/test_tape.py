@@ -166,13 +166,24 @@ PRISMATIC = {
 
 
 @pytest.mark.parametrize(
-    ("source", "seed"),
-    [("examples/five-bar-custom.toml", 0), ("examples/delta-custom.toml", 1), ("prismatic", 2)],
+    ("source", "seed", "depth"),
+    [
+        ("examples/five-bar-custom.toml", 0, None),
+        ("examples/delta-custom.toml", 1, None),
+        ("prismatic", 2, None),
+        # levels 10 and 11 have more pieces than a level's table holds
+        ("examples/five-bar-custom.toml", 3, 11),
+    ],
 )
-def test_compiled_isolation_matches_the_interpreted_one(source, seed, monkeypatch) -> None:
+def test_compiled_isolation_matches_the_interpreted_one(source, seed, depth, monkeypatch) -> None:
     """``ConstraintLeg._isolate`` (and ``reach``) of user-defined legs over random
     boxes (points, small and large ones, a few unbounded): the compiled levels
-    (``tape.isolate_level``) give the pieces of the Python loop, bit for bit."""
+    (``tape.isolate_level``, each level's joint enclosures and their sines and
+    cosines from the leg's table, or computed where it has none) give the pieces
+    of the Python loop, bit for bit."""
+    from dataclasses import replace
+
+    from moveability.mechanisms import constraint_leg
     from moveability.mechanisms.constraint_leg import ConstraintLeg
     from moveability.mechanisms.custom import CustomMechanism
 
@@ -182,6 +193,10 @@ def test_compiled_isolation_matches_the_interpreted_one(source, seed, monkeypatc
         mechanism = from_spec(load_spec(source))
     legs = [leg for leg in mechanism.legs if leg._compiled() is not None]
     assert legs
+    if depth is not None:
+        legs = [replace(leg, depth=depth) for leg in legs]
+        assert legs[0]._level_table(depth) is None
+        assert legs[0].pieces << (depth - 2) <= constraint_leg._TABLE_CAP
     rng = np.random.default_rng(seed)
     low, high = (np.asarray(b, dtype=float) for b in mechanism.bounds)
     k = low.size
@@ -198,6 +213,11 @@ def test_compiled_isolation_matches_the_interpreted_one(source, seed, monkeypatc
         for name in ("box", "lo", "hi", "mono", "finite"):
             a, b = getattr(compiled[0], name), getattr(plain[0], name)
             assert a.dtype == b.dtype and np.array_equal(a, b), name
+        if depth is not None:
+            # pieces of the levels without a table among them
+            start, stop = leg._range
+            widest_untabled = (stop - start) / leg.pieces / 2.0**9
+            assert (compiled[0].hi - compiled[0].lo < widest_untabled).any()
         assert (compiled[0].mono != 0).sum() > 100 and (compiled[0].mono == 0).any()
         assert (compiled[1].status == plain[1].status).all()
         assert (compiled[1].fold_connected == plain[1].fold_connected).all()

@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -653,7 +653,11 @@ def _reachable_contact(
 ) -> NDArray[np.bool_]:
     """Per pair of touching leaves that both hold a certified fold group: whether
     their common boundary holds a pose that every leg reaches (every leg regular
-    there but at most one, which certainly holds reachable poses there)."""
+    there but at most one, which certainly holds reachable poses there).
+
+    A leg regular over either leaf (a closed box) is regular over the common
+    boundary, a part of it: only the other legs are asked, for their statuses
+    alone where they can give them (a leg's ``branches_optional``)."""
     out = np.zeros(pairs.shape[0], dtype=bool)
     # per leaf first: one gather of a flag per pair end, not of a row
     holds: NDArray[np.bool_] = np.asarray(table.group.any(axis=1), dtype=bool)
@@ -666,7 +670,19 @@ def _reachable_contact(
     hi = np.minimum(leaves.hi[a], leaves.hi[b])
     # leaves touching across a periodic seam have no common box in coordinates
     real = (lo <= hi).all(axis=1)
-    status = np.stack([leg.reach(lo, hi).status for leg in mechanism.legs], axis=1)
+    status = np.where(
+        (table.leg_status[a] == REGULAR) | (table.leg_status[b] == REGULAR),
+        REGULAR,
+        REACH_UNKNOWN,
+    ).astype(np.uint8)
+    for i, leg in enumerate(mechanism.legs):
+        ask = np.flatnonzero(real & (status[:, i] != REGULAR))
+        if ask.size:
+            status[ask, i] = (
+                cast(Any, leg).reach(lo[ask], hi[ask], branches=False)
+                if getattr(leg, "branches_optional", False)
+                else leg.reach(lo[ask], hi[ask])
+            ).status
     regular = status == REGULAR
     folds = (status == FOLD_OUTER) | (status == FOLD_INNER)
     out[idx] = real & (regular | folds).all(axis=1) & ((~regular).sum(axis=1) <= 1)

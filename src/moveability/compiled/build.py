@@ -180,7 +180,8 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
     "moveability.mechanisms.tape._isolate_level": [
         (
             array(I8, 2), R1, R1, I8, I8, array(I8, 2), array(I8), array(I8, 2), array(I8), R2,
-            R2, array(I8), I8, R1, R1, R2, R2, R2, R2, R2, R2, array(I8, out=True), I8, B1,
+            R2, array(I8), I8, array(I8), R1, R1, R2, R2, R2, R2, R2, R2, array(I8, out=True),
+            I8, B1,
         )
     ],
     "moveability.mechanisms.tape._merge_order": [(array(I8), R1, array(I8))],

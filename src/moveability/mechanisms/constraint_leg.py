@@ -91,6 +91,9 @@ Function = Callable[..., Any]
 
 _TWO_PI = Interval(np.nextafter(2 * np.pi, 0.0), np.nextafter(2 * np.pi, np.inf))
 _INF = np.inf
+#: the most pieces of an isolation level whose derived inputs are kept in a table
+#: (:meth:`ConstraintLeg._level_table`)
+_TABLE_CAP = 1 << 14
 
 
 def _quiet() -> Any:
@@ -206,6 +209,9 @@ class ConstraintLeg:
     #: and changes no box's tree status: a fold code only names the fold, and the
     #: branches' enclosures where the leg folds are its hull either way
     folds_optional = True
+    #: ``reach(lo, hi, branches=False)`` gives the statuses and fold certificates
+    #: alone (see :meth:`reach`)
+    branches_optional = True
 
     def __post_init__(self) -> None:
         if self.prismatic:
@@ -450,27 +456,63 @@ class ConstraintLeg:
         extra: tuple[Array, Array],
     ) -> _Pieces:
         """:meth:`_isolate` a level at a time in one compiled loop
-        (:func:`moveability.mechanisms.tape.isolate_level`): the same pieces."""
+        (:func:`moveability.mechanisms.tape.isolate_level`): the same pieces.
+
+        The pieces of level ``k`` are the initial ones halved ``k`` times (at
+        ``0.5 * (lo + hi)``, as the isolation halves them), the same for every box:
+        their derived inputs (``sin(q)``, ``cos(q)``, ...) come from the level's
+        table (:meth:`_level_table`), computed once per leg, and a piece is its
+        row there."""
         n = lo.shape[0]
         counts = np.zeros(n, dtype=np.int64)
         done = []
         box: NDArray[np.int64] | None = None  # level 0: each box with every initial piece
+        at: NDArray[np.int64] | None = None
         # the derived inputs of pose coordinates (sin(phi), ...): once per box
         pose = tape.pose_values(prog, lo, hi)
+        q = (q_lo, q_hi)
         for level in range(self.depth + 1):
             if level:
                 if not box.size:  # type: ignore[union-attr]
                     break
-                extra = tape.derived_values(prog, Interval(q_lo, q_hi))
-            *final, box, q_lo, q_hi = tape.isolate_level(
-                prog, lo, hi, box, (q_lo, q_hi), extra, counts, self.max_pieces,
-                level < self.depth, pose,
+                table = self._level_table(level) if at is not None else None
+                if table is None:
+                    # no table: the pieces' own enclosures, their inputs computed
+                    at = None
+                    q = (q_lo, q_hi)
+                    extra = tape.derived_values(prog, Interval(q_lo, q_hi))
+                else:
+                    q, extra = table[:2], table[2:]
+            *final, box, q_lo, q_hi, rows = tape.isolate_level(
+                prog, lo, hi, box, q, extra, counts, self.max_pieces,
+                level < self.depth, pose, at,
             )  # fmt: skip
+            at = rows
             done.append(final)
         pieces = _Pieces(*(np.concatenate(parts) for parts in zip(*done, strict=True)))
         # each level's pieces are in (box, q) order already
         order = tape.merge_order(pieces.box, pieces.lo, [d[0].size for d in done])
         return pieces.take(order)
+
+    def _level_table(self, level: int) -> tuple[Array, Array, Array, Array] | None:
+        """The pieces of isolation level ``level`` (lower and upper bounds, in q
+        order: piece ``r``'s halves are pieces ``2 r`` and ``2 r + 1`` of the next
+        level) and their derived inputs (``(d, m)`` lower and upper bounds), built
+        once; None beyond :data:`_TABLE_CAP` pieces."""
+        memo: dict[int, Any] = self.__dict__.setdefault("_level_memo", {})
+        if level not in memo:
+            compiled = self._compiled()
+            if compiled is None or self.pieces << level > _TABLE_CAP:
+                memo[level] = None
+            else:
+                prog, q_lo, q_hi = compiled[:3]
+                for _ in range(level):
+                    mid = 0.5 * (q_lo + q_hi)
+                    q_lo = np.stack([q_lo, mid], axis=1).reshape(-1)
+                    q_hi = np.stack([mid, q_hi], axis=1).reshape(-1)
+                memo[level] = (q_lo, q_hi, *tape.derived_values(prog, Interval(q_lo, q_hi)))
+        table: tuple[Array, Array, Array, Array] | None = memo[level]
+        return table
 
     def _f_box(self, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
         """Enclosure of F over boxes x q: the natural one met with the mean-value form
@@ -578,19 +620,25 @@ class ConstraintLeg:
         np.logical_and.at(finite, run, pieces.finite)
         return _Runs(pieces, run, run_box, start, end, mono, finite)
 
-    def reach(self, lo: Array, hi: Array, *, folds: bool = True) -> LegReach:
+    def reach(
+        self, lo: Array, hi: Array, *, folds: bool = True, branches: bool = True
+    ) -> LegReach:
         """Reach code, branch enclosures and fold certificates over boxes ``[lo, hi]`` (n, k).
 
         With ``folds=False`` the fold certificates are not tried: a box where the
         leg may fold is ``REACH_UNKNOWN`` rather than ``FOLD_OUTER`` or
         ``FOLD_INNER``, and ``fold_connected`` is False. Either status folds, so
         a box's tree status is the same; a subdivision asks so for the cells it
-        splits anyway."""
+        splits anyway.
+
+        With ``branches=False`` the roots are not contracted: the statuses and
+        fold certificates are the same, the branch enclosures and the hull are
+        the whole line (for callers that need the statuses alone)."""
         lo = np.asarray(lo, dtype=np.float64)
         hi = np.asarray(hi, dtype=np.float64)
         # derived inputs of the pose (sin and cos of an angle, ...) once per box
         with tape.remembered_boxes():
-            return self._reach(lo, hi, folds)
+            return self._reach(lo, hi, folds, branches)
 
     def _root_pieces(self, lo: Array, hi: Array) -> _Pieces:
         """The pieces of :meth:`_isolate`, less those over which ``F`` is monotone
@@ -631,7 +679,9 @@ class ConstraintLeg:
             runs, f_start, f_end = runs.take(keep), f_start[keep], f_end[keep]
         return runs, f_start, f_end
 
-    def _reach(self, lo: Array, hi: Array, folds: bool = True) -> LegReach:
+    def _reach(
+        self, lo: Array, hi: Array, folds: bool = True, branches_wanted: bool = True
+    ) -> LegReach:
         n = lo.shape[0]
         runs, f_start, f_end = self._root_runs(lo, hi)
         n_runs = np.bincount(runs.box, minlength=n)
@@ -656,7 +706,7 @@ class ConstraintLeg:
         status[n_runs == 0] = REACH_OUT
 
         # contract the certified roots of the regular boxes
-        use = cert & regular[runs.box]
+        use = cert & regular[runs.box] & branches_wanted
         if use.any():
             r_lo, r_hi = self._contract(lo, hi, runs, np.flatnonzero(use), (f_start, f_end))
             idx = np.flatnonzero(use)
@@ -664,7 +714,7 @@ class ConstraintLeg:
                 sel = s[idx] == sign
                 branches[b].lo[runs.box[idx[sel]]] = r_lo[sel]
                 branches[b].hi[runs.box[idx[sel]]] = r_hi[sel]
-        if self.prismatic:
+        if self.prismatic and branches_wanted:
             # a branch without root in the widened stroke: beyond the stroke
             beyond = self._range[1] + 1.0 + abs(self._range[1])
             for b, count in ((0, n_pos), (1, n_neg)):
@@ -680,6 +730,7 @@ class ConstraintLeg:
             run_of_box = np.full(n, -1, dtype=np.intp)
             run_of_box[runs.box] = np.arange(runs.box.size)
             r = run_of_box[single]
+        if single.size and branches_wanted:
             hull.lo[single], hull.hi[single] = self._hull_ends(
                 lo, hi, runs, r, (f_start[r], f_end[r])
             )

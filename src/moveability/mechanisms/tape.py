@@ -1217,6 +1217,7 @@ def _isolate_level(
     hi: Array,
     box: NDArray[np.int64],
     tile: int,
+    at: NDArray[np.int64],
     q_lo: Array,
     q_hi: Array,
     extra_lo: Array,
@@ -1230,11 +1231,13 @@ def _isolate_level(
     split: bool,
 ) -> tuple[
     NDArray[np.int64], Array, Array, NDArray[np.int8], NDArray[np.bool_],
-    NDArray[np.int64], Array, Array,
+    NDArray[np.int64], Array, Array, NDArray[np.int64],
 ]:  # fmt: skip  # pragma: no cover - compiled
     """One level of ``ConstraintLeg._isolate`` (see :func:`isolate_level`); the
     operations ``fixed`` (on the joint alone, the others in ``code``) evaluated once
-    per enclosure ``q`` when the pieces are every box with each ``q``."""
+    per enclosure ``q`` when the pieces are every box with each ``q``. Piece ``i``
+    (``tile`` 0) takes row ``at[i]`` of ``q`` and ``extra``, row ``i`` if ``at`` is
+    empty."""
     n_box = lo.shape[0]
     m = n_box * tile if tile > 0 else box.size
     block = PIECE_BLOCK
@@ -1308,7 +1311,7 @@ def _isolate_level(
                     b_next += 1
             else:
                 rows[e] = box[start + e]
-                qis[e] = start + e
+                qis[e] = at[start + e] if at.size else start + e
         _fill(r_lo, r_hi, n, k, lo, hi, rows, q_lo, q_hi, extra_lo, extra_hi, qis, pose_lo, pose_hi)
         for x in range(n_fixed):
             slot = fixed_slots[x]
@@ -1423,6 +1426,7 @@ def _isolate_level(
     s_box = np.empty(2 * n_cut, dtype=np.int64)
     s_lo = np.empty(2 * n_cut)
     s_hi = np.empty(2 * n_cut)
+    s_at = np.empty(2 * n_cut, dtype=np.int64)
     u = 0
     v = 0
     for t in range(n_kept):
@@ -1438,6 +1442,8 @@ def _isolate_level(
             s_hi[v] = mid
             s_lo[v + 1] = mid
             s_hi[v + 1] = z
+            s_at[v] = 2 * qi
+            s_at[v + 1] = 2 * qi + 1
             v += 2
         else:
             f_box[u] = b
@@ -1447,7 +1453,7 @@ def _isolate_level(
             f_finite[u] = k_finite[t]
             counts[b] += 1
             u += 1
-    return f_box, f_lo, f_hi, f_mono, f_finite, s_box, s_lo, s_hi
+    return f_box, f_lo, f_hi, f_mono, f_finite, s_box, s_lo, s_hi, s_at
 
 
 def isolate_level(
@@ -1461,6 +1467,7 @@ def isolate_level(
     max_pieces: int,
     split: bool,
     pose: tuple[Array, Array, Array, Array] | None = None,
+    at: NDArray[np.int64] | None = None,
 ) -> tuple[Any, ...]:
     """One level of the root isolation of ``ConstraintLeg._isolate`` in one
     compiled loop, for the program of the tapes of ``F``, ``dF/dq`` and the
@@ -1478,9 +1485,15 @@ def isolate_level(
     ``extra`` holds the derived inputs of ``q`` (:func:`derived_values`), ``pose``
     those of the pose coordinates over the boxes and at their centres
     (:func:`pose_values`, computed here if None). With ``box`` None the pieces
-    are every box with each enclosure of ``q`` in turn.
+    are every box with each enclosure of ``q`` in turn. With ``at``, ``q`` and
+    ``extra`` are a table: piece ``i``'s joint enclosure is ``q[at[i]]``, its
+    derived inputs ``extra[:, at[i]]``.
+
     Returns the final pieces (box, lo, hi, sign, finite) and those of the next
-    level (box, lo, hi).
+    level (box, lo, hi, row): the halves of the row ``r`` of ``q`` (``at[i]``, or
+    ``i``, or the enclosure's index where ``box`` is None) are the rows ``2 r``
+    and ``2 r + 1`` of the table of ``q``'s enclosures each halved at
+    ``0.5 * (lo + hi)``, in order.
     """
     if pose is None:
         pose = pose_values(prog, lo, hi)
@@ -1506,6 +1519,7 @@ def isolate_level(
         np.ascontiguousarray(hi, dtype=np.float64),
         np.ascontiguousarray(box_i, dtype=np.int64),
         tile,
+        np.zeros(0, dtype=np.int64) if at is None else np.ascontiguousarray(at, dtype=np.int64),
         np.ascontiguousarray(q[0], dtype=np.float64),
         np.ascontiguousarray(q[1], dtype=np.float64),
         np.ascontiguousarray(extra[0], dtype=np.float64),
