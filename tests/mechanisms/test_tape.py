@@ -179,8 +179,9 @@ def test_compiled_isolation_matches_the_interpreted_one(source, seed, depth, mon
     """``ConstraintLeg._isolate`` (and ``reach``) of user-defined legs over random
     boxes (points, small and large ones, a few unbounded): the compiled levels
     (``tape.isolate_level``, each level's joint enclosures and their sines and
-    cosines from the leg's table, or computed where it has none) give the pieces
-    of the Python loop, bit for bit."""
+    cosines from the leg's table, or computed where it has none; the pieces of a
+    certified sign tested at their ends there) give the pieces of the Python
+    loop and its end test, bit for bit."""
     from dataclasses import replace
 
     from moveability.mechanisms import constraint_leg
@@ -204,15 +205,24 @@ def test_compiled_isolation_matches_the_interpreted_one(source, seed, depth, mon
     size = rng.choice([0.0, 1e-3, 0.02, 0.3, 3.0], size=(600, 1)) * (high - low) / 10
     lo, hi = centre - size, centre + size
     lo[:5, 0], hi[5:10, -1] = -np.inf, np.inf
+    def rows(pieces):
+        return set(zip(pieces.box.tolist(), pieces.lo.tolist(), pieces.hi.tolist(), strict=True))
+
     for leg in legs:
         with np.errstate(all="ignore"):  # the unbounded boxes' centres
-            compiled = (leg._isolate(lo, hi), leg.reach(lo, hi))
+            compiled = (leg._root_pieces(lo, hi), leg.reach(lo, hi), leg._isolate(lo, hi))
             with monkeypatch.context() as m:
                 m.setattr(ConstraintLeg, "_compiled", lambda self: None)
-                plain = (leg._isolate(lo, hi), leg.reach(lo, hi))
+                plain = (leg._root_pieces(lo, hi), leg.reach(lo, hi), leg._isolate(lo, hi))
         for name in ("box", "lo", "hi", "mono", "finite"):
             a, b = getattr(compiled[0], name), getattr(plain[0], name)
             assert a.dtype == b.dtype and np.array_equal(a, b), name
+        # the compiled levels test the ends themselves: they leave out pieces of
+        # the Python loop's, only ones its end test leaves out too
+        assert rows(plain[0]) <= rows(compiled[2]) <= rows(plain[2])
+        assert compiled[2].tested.any() and not plain[2].tested.any()
+        if source != "prismatic":  # (its enclosures leave out all those pieces first)
+            assert rows(compiled[2]) != rows(plain[2])
         if depth is not None:
             # pieces of the levels without a table among them
             start, stop = leg._range
@@ -252,8 +262,9 @@ def rrr_boxes(rng: np.random.Generator, low: np.ndarray, high: np.ndarray, n: in
 @pytest.mark.parametrize("source", ["default", "examples/three-rrr.toml"])
 def test_three_rrr_compiled_isolation_matches_the_interpreted_one(source, monkeypatch) -> None:
     """The 3-RRR's legs (tapes with derived inputs of the pose angle, sin and cos
-    of phi): ``_isolate`` and ``reach`` of the compiled levels and contraction
-    equal those of the Python loops with every function interpreted on Intervals,
+    of phi): ``_root_pieces`` and ``reach`` of the compiled levels (their end
+    tests among them) and contraction equal those of the Python loops with every
+    function interpreted on Intervals,
     bit for bit, and ``tape.run`` equals the interpreted functions."""
     from moveability.mechanisms.constraint_leg import ConstraintLeg
     from moveability.mechanisms.three_rrr import ThreeRRR
@@ -264,7 +275,7 @@ def test_three_rrr_compiled_isolation_matches_the_interpreted_one(source, monkey
     lo, hi = rrr_boxes(rng, low, high, 500)
     for leg in mechanism.legs:
         assert leg._compiled() is not None and leg._compiled()[0].pose_derived
-        compiled = (leg._isolate(lo, hi), leg.reach(lo, hi))
+        compiled = (leg._root_pieces(lo, hi), leg.reach(lo, hi))
         with monkeypatch.context() as m:
             m.setattr(ConstraintLeg, "_compiled", lambda self: None)
             m.setattr(tp, "trig_kinds", lambda tape: None)  # the contraction's Python loop
@@ -273,7 +284,7 @@ def test_three_rrr_compiled_isolation_matches_the_interpreted_one(source, monkey
                 "_box_eval",
                 lambda self, g, lo, hi, box, q: self._eval(g, self._coords(lo, hi, box), q),
             )
-            plain = (leg._isolate(lo, hi), leg.reach(lo, hi))
+            plain = (leg._root_pieces(lo, hi), leg.reach(lo, hi))
         for name in ("box", "lo", "hi", "mono", "finite"):
             a, b = getattr(compiled[0], name), getattr(plain[0], name)
             assert a.dtype == b.dtype and np.array_equal(a, b), name

@@ -181,7 +181,7 @@ EXPORTS: dict[str, list[tuple[Any, ...]]] = {
         (
             array(I8, 2), R1, R1, I8, I8, array(I8, 2), array(I8), array(I8, 2), array(I8), R2,
             R2, array(I8), I8, array(I8), R1, R1, R2, R2, R2, R2, R2, R2, array(I8, out=True),
-            I8, B1,
+            I8, B1, array(I8, 2), R1, R2, R2, I8,
         )
     ],
     "moveability.mechanisms.tape._merge_order": [(array(I8), R1, array(I8))],

@@ -109,11 +109,15 @@ class _Pieces:
     hi: Array
     mono: NDArray[np.int8]  # sign of dF/dq certified on the piece, 0 if none
     finite: NDArray[np.bool_]  # F finite (defined, continuous) on box x piece
+    # F tested at the two ends already (by the compiled isolation): a piece of a
+    # certified sign that holds no root is not among them
+    tested: NDArray[np.bool_]
 
     def take(self, keep: Any) -> _Pieces:
         return _Pieces(
-            self.box[keep], self.lo[keep], self.hi[keep], self.mono[keep], self.finite[keep]
-        )
+            self.box[keep], self.lo[keep], self.hi[keep], self.mono[keep], self.finite[keep],
+            self.tested[keep],
+        )  # fmt: skip
 
 
 @dataclass
@@ -427,7 +431,10 @@ class ConstraintLeg:
             total = counts + np.bincount(box, minlength=n)
             split = (mono == 0) & (total[box] <= self.max_pieces) & (level < self.depth)
             final = ~split
-            done.append(_Pieces(box[final], qlo[final], qhi[final], mono[final], finite[final]))
+            untested = np.zeros(int(final.sum()), dtype=bool)
+            done.append(
+                _Pieces(box[final], qlo[final], qhi[final], mono[final], finite[final], untested)
+            )
             counts += np.bincount(box[final], minlength=n)
             mid = 0.5 * (qlo[split] + qhi[split])
             box = np.repeat(box[split], 2)
@@ -442,6 +449,7 @@ class ConstraintLeg:
             np.concatenate([d.hi for d in done]) if done else np.zeros(0),
             np.concatenate([d.mono for d in done]) if done else np.zeros(0, dtype=np.int8),
             np.concatenate([d.finite for d in done]) if done else np.zeros(0, dtype=bool),
+            np.concatenate([d.tested for d in done]) if done else np.zeros(0, dtype=bool),
         )
         order = np.lexsort((pieces.lo, pieces.box))
         return pieces.take(order)
@@ -456,13 +464,16 @@ class ConstraintLeg:
         extra: tuple[Array, Array],
     ) -> _Pieces:
         """:meth:`_isolate` a level at a time in one compiled loop
-        (:func:`moveability.mechanisms.tape.isolate_level`): the same pieces.
+        (:func:`moveability.mechanisms.tape.isolate_level`): the same pieces, but
+        those of a certified sign that hold no root (the test of
+        :meth:`_root_pieces`, made there at their ends; ``tested``).
 
         The pieces of level ``k`` are the initial ones halved ``k`` times (at
         ``0.5 * (lo + hi)``, as the isolation halves them), the same for every box:
         their derived inputs (``sin(q)``, ``cos(q)``, ...) come from the level's
         table (:meth:`_level_table`), computed once per leg, and a piece is its
-        row there."""
+        row there; their ends are points of the finest table's grid
+        (:meth:`_end_grid`)."""
         n = lo.shape[0]
         counts = np.zeros(n, dtype=np.int64)
         done = []
@@ -471,6 +482,7 @@ class ConstraintLeg:
         # the derived inputs of pose coordinates (sin(phi), ...): once per box
         pose = tape.pose_values(prog, lo, hi)
         q = (q_lo, q_hi)
+        grid = self._end_grid()
         for level in range(self.depth + 1):
             if level:
                 if not box.size:  # type: ignore[union-attr]
@@ -483,12 +495,15 @@ class ConstraintLeg:
                     extra = tape.derived_values(prog, Interval(q_lo, q_hi))
                 else:
                     q, extra = table[:2], table[2:]
-            *final, box, q_lo, q_hi, rows = tape.isolate_level(
+            ends = None
+            if grid is not None and (level == 0 or at is not None) and level <= grid[3]:
+                ends = (*grid[:3], grid[3] - level)
+            *final, box, q_lo, q_hi, rows, tested = tape.isolate_level(
                 prog, lo, hi, box, q, extra, counts, self.max_pieces,
-                level < self.depth, pose, at,
+                level < self.depth, pose, at, ends,
             )  # fmt: skip
             at = rows
-            done.append(final)
+            done.append((*final, tested))
         pieces = _Pieces(*(np.concatenate(parts) for parts in zip(*done, strict=True)))
         # each level's pieces are in (box, q) order already
         order = tape.merge_order(pieces.box, pieces.lo, [d[0].size for d in done])
@@ -513,6 +528,29 @@ class ConstraintLeg:
                 memo[level] = (q_lo, q_hi, *tape.derived_values(prog, Interval(q_lo, q_hi)))
         table: tuple[Array, Array, Array, Array] | None = memo[level]
         return table
+
+    def _end_grid(self) -> tuple[Array, Array, Array, int] | None:
+        """The ends of the pieces of the deepest level ``L`` with a table (those of
+        its pieces, then the range's end) and their derived inputs as points
+        (``(d, g)`` lower and upper bounds), and ``L``: the ends of row ``r`` of
+        level ``k <= L`` are the points ``r << (L - k)`` and ``(r + 1) << (L - k)``
+        (the halves of a piece share its middle). None without a table."""
+        if "_grid_memo" not in self.__dict__:
+            memo = None
+            deepest = -1
+            for level in range(self.depth + 1):
+                if self.pieces << level > _TABLE_CAP:
+                    break
+                deepest = level
+            table = self._level_table(deepest) if deepest >= 0 else None
+            compiled = self._compiled()
+            if table is not None and compiled is not None:
+                points = np.append(table[0], table[1][-1])
+                values = tape.derived_values(compiled[0], ex.points(points))
+                memo = (points, *values, deepest)
+            self.__dict__["_grid_memo"] = memo
+        grid: tuple[Array, Array, Array, int] | None = self.__dict__["_grid_memo"]
+        return grid
 
     def _f_box(self, lo: Array, hi: Array, box: Any, q: Interval) -> Interval:
         """Enclosure of F over boxes x q: the natural one met with the mean-value form
@@ -647,7 +685,7 @@ class ConstraintLeg:
         monotone pieces at the ends of the run go, and the run is the part of the
         range about the fold."""
         pieces = self._isolate(lo, hi)
-        mono = np.flatnonzero((pieces.mono != 0) & pieces.finite)
+        mono = np.flatnonzero((pieces.mono != 0) & pieces.finite & ~pieces.tested)
         if not mono.size:
             return pieces
         box = pieces.box[mono]

@@ -1229,15 +1229,25 @@ def _isolate_level(
     counts: NDArray[np.int64],
     max_pieces: int,
     split: bool,
+    f_point: NDArray[np.int64],
+    grid: Array,
+    grid_lo: Array,
+    grid_hi: Array,
+    shift: int,
 ) -> tuple[
     NDArray[np.int64], Array, Array, NDArray[np.int8], NDArray[np.bool_],
-    NDArray[np.int64], Array, Array, NDArray[np.int64],
+    NDArray[np.int64], Array, Array, NDArray[np.int64], NDArray[np.bool_],
 ]:  # fmt: skip  # pragma: no cover - compiled
     """One level of ``ConstraintLeg._isolate`` (see :func:`isolate_level`); the
     operations ``fixed`` (on the joint alone, the others in ``code``) evaluated once
     per enclosure ``q`` when the pieces are every box with each ``q``. Piece ``i``
     (``tile`` 0) takes row ``at[i]`` of ``q`` and ``extra``, row ``i`` if ``at`` is
-    empty."""
+    empty.
+
+    With ``shift >= 0`` the ends of row ``r`` are the points ``grid[r << shift]``
+    and ``grid[(r + 1) << shift]`` (their derived inputs ``grid_lo``, ``grid_hi``):
+    a final piece of a certified sign is tested there (``f_point``, the code of
+    ``F`` alone on the whole register file) and left out where it holds no root."""
     n_box = lo.shape[0]
     m = n_box * tile if tile > 0 else box.size
     block = PIECE_BLOCK
@@ -1417,12 +1427,52 @@ def _isolate_level(
         cut[t] = split and k_mono[t] == 0 and counts[b] + current[b] <= max_pieces
         if cut[t]:
             n_cut += 1
-    n_final = n_kept - n_cut
+    # the final pieces of a certified sign: F at their two ends over the box, a
+    # piece of F on one side at both (ConstraintLeg._root_pieces) left out
+    free = np.zeros(n_kept, dtype=np.bool_)
+    tested = shift >= 0
+    if tested:
+        ends = np.empty(n_kept, dtype=np.int64)
+        n_ends = 0
+        for t in range(n_kept):
+            if k_mono[t] != 0 and k_finite[t] and not cut[t]:
+                ends[n_ends] = t
+                n_ends += 1
+        half = block // 2
+        for start in range(0, n_ends, half):
+            m = min(half, n_ends - start)
+            for u in range(m):
+                t = ends[start + u]
+                rows[2 * u] = k_box[t]
+                rows[2 * u + 1] = k_box[t]
+                qis[2 * u] = k_qi[t] << shift
+                qis[2 * u + 1] = (k_qi[t] + 1) << shift
+            _fill(
+                r_lo, r_hi, 2 * m, k, lo, hi, rows, grid, grid, grid_lo, grid_hi, qis,
+                pose_lo, pose_hi,
+            )  # fmt: skip
+            run_ops(f_point, r_lo, r_hi, 2 * m)
+            for u in range(m):
+                t = ends[start + u]
+                a_lo = r_lo[out_f, 2 * u]
+                a_hi = r_hi[out_f, 2 * u]
+                z_lo = r_lo[out_f, 2 * u + 1]
+                z_hi = r_hi[out_f, 2 * u + 1]
+                if k_mono[t] > 0:
+                    free[t] = a_lo > 0.0 or z_hi < 0.0
+                else:
+                    free[t] = a_hi < 0.0 or z_lo > 0.0
+    n_free = 0
+    for t in range(n_kept):
+        if free[t]:
+            n_free += 1
+    n_final = n_kept - n_cut - n_free
     f_box = np.empty(n_final, dtype=np.int64)
     f_lo = np.empty(n_final)
     f_hi = np.empty(n_final)
     f_mono = np.empty(n_final, dtype=np.int8)
     f_finite = np.empty(n_final, dtype=np.bool_)
+    f_tested = np.empty(n_final, dtype=np.bool_)
     s_box = np.empty(2 * n_cut, dtype=np.int64)
     s_lo = np.empty(2 * n_cut)
     s_hi = np.empty(2 * n_cut)
@@ -1446,14 +1496,18 @@ def _isolate_level(
             s_at[v + 1] = 2 * qi + 1
             v += 2
         else:
+            # a piece left out still counts towards its box's max_pieces
+            counts[b] += 1
+            if free[t]:
+                continue
             f_box[u] = b
             f_lo[u] = a
             f_hi[u] = z
             f_mono[u] = k_mono[t]
             f_finite[u] = k_finite[t]
-            counts[b] += 1
+            f_tested[u] = tested
             u += 1
-    return f_box, f_lo, f_hi, f_mono, f_finite, s_box, s_lo, s_hi, s_at
+    return f_box, f_lo, f_hi, f_mono, f_finite, s_box, s_lo, s_hi, s_at, f_tested
 
 
 def isolate_level(
@@ -1468,6 +1522,7 @@ def isolate_level(
     split: bool,
     pose: tuple[Array, Array, Array, Array] | None = None,
     at: NDArray[np.int64] | None = None,
+    ends: tuple[Array, Array, Array, int] | None = None,
 ) -> tuple[Any, ...]:
     """One level of the root isolation of ``ConstraintLeg._isolate`` in one
     compiled loop, for the program of the tapes of ``F``, ``dF/dq`` and the
@@ -1489,11 +1544,18 @@ def isolate_level(
     ``extra`` are a table: piece ``i``'s joint enclosure is ``q[at[i]]``, its
     derived inputs ``extra[:, at[i]]``.
 
-    Returns the final pieces (box, lo, hi, sign, finite) and those of the next
-    level (box, lo, hi, row): the halves of the row ``r`` of ``q`` (``at[i]``, or
-    ``i``, or the enclosure's index where ``box`` is None) are the rows ``2 r``
-    and ``2 r + 1`` of the table of ``q``'s enclosures each halved at
-    ``0.5 * (lo + hi)``, in order.
+    With ``ends = (grid, grid_lo, grid_hi, shift)`` the two ends of row ``r`` of
+    ``q`` are the points ``grid[r << shift]`` and ``grid[(r + 1) << shift]``, their
+    derived inputs ``grid_lo``, ``grid_hi`` (``(d, g)`` arrays): a final piece of
+    a certified sign where ``F`` (its natural enclosure over the box) is on one
+    side at both ends, so that it holds no root, is left out (counted among its
+    box's pieces all the same), the test of ``ConstraintLeg._root_pieces``.
+
+    Returns the final pieces (box, lo, hi, sign, finite), those of the next level
+    (box, lo, hi, row) and whether each final piece was tested at its ends: the
+    halves of the row ``r`` of ``q`` (``at[i]``, or ``i``, or the enclosure's
+    index where ``box`` is None) are the rows ``2 r`` and ``2 r + 1`` of the
+    table of ``q``'s enclosures each halved at ``0.5 * (lo + hi)``, in order.
     """
     if pose is None:
         pose = pose_values(prog, lo, hi)
@@ -1531,7 +1593,13 @@ def isolate_level(
         counts,
         int(max_pieces),
         bool(split),
+        np.ascontiguousarray(prog.code[prog.ranges[0, 0] : prog.ranges[0, 1]]),
+        *(_NO_ENDS if ends is None else ends),
     )
+
+
+#: no end tests (:func:`isolate_level`)
+_NO_ENDS = (np.zeros(1), np.zeros((0, 1)), np.zeros((0, 1)), -1)
 
 
 @kernel
