@@ -267,3 +267,41 @@ def test_planned_motion_changes_posture_through_a_user_defined_fold(pair):
         changed += len({c["posture"] for c in motion["path"]}) > 1
     if len(region.postures) > 1:
         assert changed > 0
+
+
+@pytest.mark.parametrize("name", ["five-bar-custom.toml", "delta-custom.toml", "three-rrr.toml"])
+def test_det_a_of_every_posture_shares_the_legs_rows(name, monkeypatch):
+    """``det_a_postures`` of mechanisms whose det A is the determinant of the legs'
+    rows computes a leg's rows on a branch once for every posture that takes it:
+    the enclosures of ``det_a_boxes`` posture by posture, bit for bit, from one
+    ``a_row_boxes`` call per leg and branch."""
+    from moveability import load_spec
+    from moveability.mechanisms import from_spec
+    from moveability.mechanisms.constraint_leg import ConstraintLeg
+
+    mechanism = from_spec(load_spec(EXAMPLE.parent / name))
+    rng = np.random.default_rng(11)
+    low, high = (np.asarray(b, dtype=float) for b in mechanism.bounds)
+    span = high - low
+    width = span * rng.uniform(1 / 100, 1 / 10, (400, 1))
+    lo = low + (span - width) * rng.random((400, low.size))
+    hi = lo + width
+    angles = [list(leg.reach(lo, hi).branches) for leg in mechanism.legs]
+    calls = []
+    plain = ConstraintLeg.a_row_boxes
+
+    def counted(self, *args):
+        calls.append(self)
+        return plain(self, *args)
+
+    monkeypatch.setattr(ConstraintLeg, "a_row_boxes", counted)
+    every = mechanism.det_a_postures(lo, hi, angles)
+    used = {(i, int(b)) for row in mechanism.postures for i, b in enumerate(row)}
+    assert len(calls) == len(used) < mechanism.postures.size
+    finite = 0
+    for p, row in enumerate(mechanism.postures):
+        one = mechanism.det_a_boxes(lo, hi, [angles[i][b] for i, b in enumerate(row)], posture=p)
+        assert np.array_equal(every[p].lo, one.lo, equal_nan=True)
+        assert np.array_equal(every[p].hi, one.hi, equal_nan=True)
+        finite += int(np.isfinite(one.lo).sum())
+    assert finite > 100  # regular boxes among them: enclosures, not the whole line

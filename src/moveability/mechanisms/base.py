@@ -705,11 +705,21 @@ class Mechanism:
         True
         """
         out = []
+        # with det A the determinant of the legs' rows, a leg's rows on a branch
+        # are computed once for every posture that takes it
+        shared = type(self).det_a_boxes is Mechanism.det_a_boxes
+        rows: dict[tuple[int, int], list[Interval]] = {}
         for p, branches in enumerate(self.postures):
             angles = [branch_angles[i][int(b)] for i, b in enumerate(branches)]
             if any(a is None for a in angles):
                 raise ValueError(f"branch_angles: no enclosure for a branch of posture {p}")
-            out.append(self.det_a_boxes(lo, hi, angles, posture=p))  # type: ignore[arg-type]
+            if not shared:
+                out.append(self.det_a_boxes(lo, hi, angles, posture=p))  # type: ignore[arg-type]
+                continue
+            for i, b in enumerate(branches):
+                if (i, int(b)) not in rows:
+                    rows[i, int(b)] = self.legs[i].a_row_boxes(lo, hi, angles[i])  # type: ignore[arg-type]
+            out.append(interval_det([rows[i, int(b)] for i, b in enumerate(branches)]))
         return out
 
     def reaches_and_det(

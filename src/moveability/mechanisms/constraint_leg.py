@@ -112,12 +112,19 @@ class _Pieces:
     # F tested at the two ends already (by the compiled isolation): a piece of a
     # certified sign that holds no root is not among them
     tested: NDArray[np.bool_]
+    # where tested: F's bounds over the box at lo (rows 0, 1) and at hi (rows 2, 3)
+    ends: Array
 
     def take(self, keep: Any) -> _Pieces:
         return _Pieces(
             self.box[keep], self.lo[keep], self.hi[keep], self.mono[keep], self.finite[keep],
-            self.tested[keep],
+            self.tested[keep], self.ends[:, keep],
         )  # fmt: skip
+
+    def end_values(self, at: NDArray[np.intp], upper: bool) -> Interval:
+        """``F`` over the box at the lower (or ``upper``) end of the tested pieces ``at``."""
+        row = 2 if upper else 0
+        return Interval(self.ends[row, at], self.ends[row + 1, at])
 
 
 @dataclass
@@ -431,10 +438,10 @@ class ConstraintLeg:
             total = counts + np.bincount(box, minlength=n)
             split = (mono == 0) & (total[box] <= self.max_pieces) & (level < self.depth)
             final = ~split
-            untested = np.zeros(int(final.sum()), dtype=bool)
-            done.append(
-                _Pieces(box[final], qlo[final], qhi[final], mono[final], finite[final], untested)
-            )
+            m = int(final.sum())
+            untested, no_ends = np.zeros(m, dtype=bool), np.full((4, m), np.nan)
+            piece_arrays = (box[final], qlo[final], qhi[final], mono[final], finite[final])
+            done.append(_Pieces(*piece_arrays, untested, no_ends))
             counts += np.bincount(box[final], minlength=n)
             mid = 0.5 * (qlo[split] + qhi[split])
             box = np.repeat(box[split], 2)
@@ -450,6 +457,7 @@ class ConstraintLeg:
             np.concatenate([d.mono for d in done]) if done else np.zeros(0, dtype=np.int8),
             np.concatenate([d.finite for d in done]) if done else np.zeros(0, dtype=bool),
             np.concatenate([d.tested for d in done]) if done else np.zeros(0, dtype=bool),
+            np.concatenate([d.ends for d in done], axis=1) if done else np.zeros((4, 0)),
         )
         order = np.lexsort((pieces.lo, pieces.box))
         return pieces.take(order)
@@ -498,13 +506,15 @@ class ConstraintLeg:
             ends = None
             if grid is not None and (level == 0 or at is not None) and level <= grid[3]:
                 ends = (*grid[:3], grid[3] - level)
-            *final, box, q_lo, q_hi, rows, tested = tape.isolate_level(
+            *final, box, q_lo, q_hi, rows, tested, values = tape.isolate_level(
                 prog, lo, hi, box, q, extra, counts, self.max_pieces,
                 level < self.depth, pose, at, ends,
             )  # fmt: skip
             at = rows
-            done.append((*final, tested))
-        pieces = _Pieces(*(np.concatenate(parts) for parts in zip(*done, strict=True)))
+            done.append((*final, tested, values))
+        pieces = _Pieces(
+            *(np.concatenate(parts, axis=-1) for parts in zip(*done, strict=True))
+        )
         # each level's pieces are in (box, q) order already
         order = tape.merge_order(pieces.box, pieces.lo, [d[0].size for d in done])
         return pieces.take(order)
@@ -709,13 +719,51 @@ class ConstraintLeg:
         leg's reach, whose enclosures of F over pieces of the range still hold 0,
         is then out, and one with two roots besides is regular."""
         runs = self._runs(self._root_pieces(lo, hi), lo.shape[0])
-        f_start = self._box_eval(self.f, lo, hi, runs.box, ex.points(runs.start))
-        f_end = self._box_eval(self.f, lo, hi, runs.box, runs.end)
+        f_start, f_end = self._run_ends(lo, hi, runs)
         free = runs.finite & _root_free(runs.mono, f_start, f_end)
         if free.any():
             keep = np.flatnonzero(~free)
             runs, f_start, f_end = runs.take(keep), f_start[keep], f_end[keep]
         return runs, f_start, f_end
+
+    def _piece_ends(
+        self, lo: Array, hi: Array, pieces: _Pieces, at: NDArray[np.intp], upper: bool
+    ) -> Interval:
+        """``F`` over each piece ``at``'s box at its lower (``upper``: upper) end: the
+        compiled isolation's bounds there where it tested the piece, the same
+        floats computed elsewhere."""
+        out = pieces.end_values(at, upper)
+        todo = np.flatnonzero(~pieces.tested[at])
+        if todo.size:
+            q = (pieces.hi if upper else pieces.lo)[at[todo]]
+            v = self._box_eval(self.f, lo, hi, pieces.box[at[todo]], ex.points(q))
+            out.lo[todo], out.hi[todo] = v.lo, v.hi
+        return out
+
+    def _run_ends(self, lo: Array, hi: Array, runs: _Runs) -> tuple[Interval, Interval]:
+        """``F`` over each run's box at its start and its end. A run's start is the
+        lower end of its first piece, and its end the upper end of its last one
+        (a run unwrapped across the circle's cut ends one turn on, computed):
+        their values from :meth:`_piece_ends`."""
+        pieces, run = runs.pieces, runs.run_of_piece
+        n_runs = runs.box.size
+        # the pieces of a run not moved one turn on: consecutive, in run order
+        plain = np.flatnonzero(pieces.lo >= runs.start[run])
+        of = run[plain]
+        edge = np.ones(plain.size + 1, dtype=bool)
+        edge[1:-1] = of[1:] != of[:-1]
+        first, last = plain[edge[:-1]], plain[edge[1:]]
+        if first.size != n_runs or not np.array_equal(of[edge[:-1]], np.arange(n_runs)):
+            starts = self._box_eval(self.f, lo, hi, runs.box, ex.points(runs.start))
+            return starts, self._box_eval(self.f, lo, hi, runs.box, runs.end)
+        f_start = self._piece_ends(lo, hi, pieces, first, upper=False)
+        f_end = self._piece_ends(lo, hi, pieces, last, upper=True)
+        end = pieces.hi[last]
+        turned = np.flatnonzero((runs.end.lo != end) | (runs.end.hi != end))
+        if turned.size:
+            v = self._box_eval(self.f, lo, hi, runs.box[turned], runs.end[turned])
+            f_end.lo[turned], f_end.hi[turned] = v.lo, v.hi
+        return f_start, f_end
 
     def _reach(
         self, lo: Array, hi: Array, folds: bool = True, branches_wanted: bool = True
@@ -839,13 +887,13 @@ class ConstraintLeg:
             # then taken at the piece's own end); at the piece's other end, computed
             known = f[idx]
             if side < 0:
-                f_ends = (known, self._box_eval(self.f, lo, hi, box, ex.points(p_hi)))
+                f_ends = (known, self._piece_ends(lo, hi, pieces, at[idx], upper=True))
             else:
                 if wrapped.any():
-                    turn = self._box_eval(self.f, lo, hi, box[wrapped], ex.points(p_hi[wrapped]))
+                    turn = self._piece_ends(lo, hi, pieces, at[idx][wrapped], upper=True)
                     known = Interval(known.lo.copy(), known.hi.copy())
                     known.lo[wrapped], known.hi[wrapped] = turn.lo, turn.hi
-                f_ends = (self._box_eval(self.f, lo, hi, box, ex.points(p_lo)), known)
+                f_ends = (self._piece_ends(lo, hi, pieces, at[idx], upper=False), known)
             below, above = self._contract(lo, hi, own, np.arange(idx.size), f_ends)
             if side < 0:
                 start[idx] = below

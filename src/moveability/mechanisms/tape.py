@@ -1236,7 +1236,7 @@ def _isolate_level(
     shift: int,
 ) -> tuple[
     NDArray[np.int64], Array, Array, NDArray[np.int8], NDArray[np.bool_],
-    NDArray[np.int64], Array, Array, NDArray[np.int64], NDArray[np.bool_],
+    NDArray[np.int64], Array, Array, NDArray[np.int64], NDArray[np.bool_], Array,
 ]:  # fmt: skip  # pragma: no cover - compiled
     """One level of ``ConstraintLeg._isolate`` (see :func:`isolate_level`); the
     operations ``fixed`` (on the joint alone, the others in ``code``) evaluated once
@@ -1247,7 +1247,10 @@ def _isolate_level(
     With ``shift >= 0`` the ends of row ``r`` are the points ``grid[r << shift]``
     and ``grid[(r + 1) << shift]`` (their derived inputs ``grid_lo``, ``grid_hi``):
     a final piece of a certified sign is tested there (``f_point``, the code of
-    ``F`` alone on the whole register file) and left out where it holds no root."""
+    ``F`` alone on the whole register file) and left out where it holds no root.
+    The last two outputs: whether each final piece was tested, and ``F``'s bounds
+    at its two ends where it was (rows: lower and upper bound at ``lo``, then at
+    ``hi``; NaN elsewhere)."""
     n_box = lo.shape[0]
     m = n_box * tile if tile > 0 else box.size
     block = PIECE_BLOCK
@@ -1430,6 +1433,8 @@ def _isolate_level(
     # the final pieces of a certified sign: F at their two ends over the box, a
     # piece of F on one side at both (ConstraintLeg._root_pieces) left out
     free = np.zeros(n_kept, dtype=np.bool_)
+    # F's bounds at the two ends of each tested piece (lower end, then upper end)
+    end_values = np.full((4, n_kept), np.nan)
     tested = shift >= 0
     if tested:
         ends = np.empty(n_kept, dtype=np.int64)
@@ -1458,6 +1463,10 @@ def _isolate_level(
                 a_hi = r_hi[out_f, 2 * u]
                 z_lo = r_lo[out_f, 2 * u + 1]
                 z_hi = r_hi[out_f, 2 * u + 1]
+                end_values[0, t] = a_lo
+                end_values[1, t] = a_hi
+                end_values[2, t] = z_lo
+                end_values[3, t] = z_hi
                 if k_mono[t] > 0:
                     free[t] = a_lo > 0.0 or z_hi < 0.0
                 else:
@@ -1473,6 +1482,7 @@ def _isolate_level(
     f_mono = np.empty(n_final, dtype=np.int8)
     f_finite = np.empty(n_final, dtype=np.bool_)
     f_tested = np.empty(n_final, dtype=np.bool_)
+    f_ends = np.empty((4, n_final))
     s_box = np.empty(2 * n_cut, dtype=np.int64)
     s_lo = np.empty(2 * n_cut)
     s_hi = np.empty(2 * n_cut)
@@ -1505,9 +1515,11 @@ def _isolate_level(
             f_hi[u] = z
             f_mono[u] = k_mono[t]
             f_finite[u] = k_finite[t]
-            f_tested[u] = tested
+            f_tested[u] = tested and k_mono[t] != 0 and k_finite[t]
+            for e in range(4):
+                f_ends[e, u] = end_values[e, t]
             u += 1
-    return f_box, f_lo, f_hi, f_mono, f_finite, s_box, s_lo, s_hi, s_at, f_tested
+    return f_box, f_lo, f_hi, f_mono, f_finite, s_box, s_lo, s_hi, s_at, f_tested, f_ends
 
 
 def isolate_level(
@@ -1552,10 +1564,12 @@ def isolate_level(
     box's pieces all the same), the test of ``ConstraintLeg._root_pieces``.
 
     Returns the final pieces (box, lo, hi, sign, finite), those of the next level
-    (box, lo, hi, row) and whether each final piece was tested at its ends: the
-    halves of the row ``r`` of ``q`` (``at[i]``, or ``i``, or the enclosure's
-    index where ``box`` is None) are the rows ``2 r`` and ``2 r + 1`` of the
-    table of ``q``'s enclosures each halved at ``0.5 * (lo + hi)``, in order.
+    (box, lo, hi, row), whether each final piece was tested at its ends and
+    ``F``'s enclosures there (a ``(4, m)`` array: lower and upper bound at the
+    piece's ``lo``, then at its ``hi``; NaN where not tested): the halves of the
+    row ``r`` of ``q`` (``at[i]``, or ``i``, or the enclosure's index where
+    ``box`` is None) are the rows ``2 r`` and ``2 r + 1`` of the table of ``q``'s
+    enclosures each halved at ``0.5 * (lo + hi)``, in order.
     """
     if pose is None:
         pose = pose_values(prog, lo, hi)
