@@ -364,3 +364,46 @@ def test_guarded_expressions_never_certify_across_a_pole():
     # two roots, both with dF/dq > 0: not a regular leg
     assert reach.status[0] != REGULAR
     assert iv.tan(Interval(1.5, 1.6)).hi == np.inf
+
+
+@pytest.mark.parametrize(
+    "source", ["five-bar-custom.toml", "delta-custom.toml", "three-rrr.toml"]
+)
+def test_run_ends_from_the_isolation_are_those_evaluated(source):
+    """``F`` at the runs' starts and ends (``_run_ends``), taken from the compiled
+    isolation's end tests where it made them, equals ``F`` evaluated there bit for
+    bit (one turn on at the end of a run across the circle's cut), and most of
+    them come from the isolation."""
+    from pathlib import Path
+
+    from moveability import load_spec
+    from moveability.mechanisms import expressions as ex
+    from moveability.mechanisms import from_spec
+
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    mechanism = from_spec(load_spec(examples / source))
+    rng = np.random.default_rng(21)
+    low, high = (np.asarray(b, dtype=float) for b in mechanism.bounds)
+    span = high - low
+    width = span * rng.choice([0.0, 1 / 400, 1 / 60, 1 / 8], (3000, 1))
+    lo = low + (span - width) * rng.random((3000, low.size))
+    hi = lo + width
+    wrapped = reused = total = 0
+    for leg in mechanism.legs:
+        runs = leg._runs(leg._root_pieces(lo, hi), lo.shape[0])
+        f_start, f_end = leg._run_ends(lo, hi, runs)
+        start = leg._box_eval(leg.f, lo, hi, runs.box, ex.points(runs.start))
+        end = leg._box_eval(leg.f, lo, hi, runs.box, runs.end)
+        for got, want in ((f_start, start), (f_end, end)):
+            assert np.array_equal(got.lo, want.lo, equal_nan=True)
+            assert np.array_equal(got.hi, want.hi, equal_nan=True)
+        wrapped += int((runs.end.hi > np.pi).sum())
+        # the runs whose first piece the isolation tested
+        pieces = runs.pieces
+        keys = zip(pieces.box.tolist(), pieces.lo.tolist(), strict=True)
+        where = {key: i for i, key in enumerate(keys)}
+        first = [where[key] for key in zip(runs.box.tolist(), runs.start.tolist(), strict=True)]
+        reused += int(pieces.tested[first].sum())
+        total += runs.box.size
+    assert wrapped > 0  # runs across the cut among them
+    assert reused > total // 4

@@ -68,7 +68,8 @@ class LegReach:
     status : ndarray of uint8, shape (n,)
         One of the reach codes above.
     branches : list of Interval
-        Joint-angle enclosure of each branch (meaningful where REGULAR).
+        Joint-angle enclosure of each branch (meaningful where REGULAR; the whole
+        line where the leg was asked for its statuses alone).
     hull : Interval
         Enclosure of all branches together (where folding; infinite where unknown).
     fold_connected : ndarray of bool
@@ -686,8 +687,10 @@ class Mechanism:
         """:meth:`det_a_boxes` of every posture over the same boxes, from each leg's
         joint-angle enclosure on each branch (``branch_angles[i][b]``, leg ``i`` on
         branch ``b``; None for a branch no posture takes): posture ``p`` has leg
-        ``i``'s enclosure on its branch ``postures[p][i]``. Here one call per
-        posture; a mechanism may compute what several postures share once.
+        ``i``'s enclosure on its branch ``postures[p][i]``. Here, where det A is the
+        determinant of the legs' rows (:meth:`det_a_boxes` not overridden), each
+        leg's rows on a branch once for every posture that takes it, else one
+        :meth:`det_a_boxes` call per posture; a mechanism may share more.
 
         Examples
         --------

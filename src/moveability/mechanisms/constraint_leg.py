@@ -472,16 +472,18 @@ class ConstraintLeg:
         extra: tuple[Array, Array],
     ) -> _Pieces:
         """:meth:`_isolate` a level at a time in one compiled loop
-        (:func:`moveability.mechanisms.tape.isolate_level`): the same pieces, but
-        those of a certified sign that hold no root (the test of
-        :meth:`_root_pieces`, made there at their ends; ``tested``).
+        (:func:`moveability.mechanisms.tape.isolate_level`): the same pieces, except
+        those of a certified sign that hold no root, which the levels with a table
+        find by the test of :meth:`_root_pieces` at their ends and leave out (the
+        others are ``tested``, with ``F``'s bounds at their ends).
 
         The pieces of level ``k`` are the initial ones halved ``k`` times (at
         ``0.5 * (lo + hi)``, as the isolation halves them), the same for every box:
         their derived inputs (``sin(q)``, ``cos(q)``, ...) come from the level's
         table (:meth:`_level_table`), computed once per leg, and a piece is its
         row there; their ends are points of the finest table's grid
-        (:meth:`_end_grid`)."""
+        (:meth:`_end_grid`). A level of more pieces than :data:`_TABLE_CAP` has
+        no table: its inputs are computed on its pieces, which are not tested."""
         n = lo.shape[0]
         counts = np.zeros(n, dtype=np.int64)
         done = []

@@ -1247,7 +1247,8 @@ def _isolate_level(
     With ``shift >= 0`` the ends of row ``r`` are the points ``grid[r << shift]``
     and ``grid[(r + 1) << shift]`` (their derived inputs ``grid_lo``, ``grid_hi``):
     a final piece of a certified sign is tested there (``f_point``, the code of
-    ``F`` alone on the whole register file) and left out where it holds no root.
+    ``F`` alone on the whole register file) and left out where it holds no root
+    (``constraint_leg._root_free``).
     The last two outputs: whether each final piece was tested, and ``F``'s bounds
     at its two ends where it was (rows: lower and upper bound at ``lo``, then at
     ``hi``; NaN elsewhere)."""
@@ -1547,7 +1548,9 @@ def isolate_level(
     none, or if ``F`` is not finite) and are final, or are halved when they have
     no sign, ``split`` holds and their box has at most ``max_pieces`` pieces:
     those of ``counts`` (final ones of the levels before, updated here) and this
-    level's kept ones. The same steps on the same floats as the interpreted level.
+    level's kept ones. The same steps on the same floats as the interpreted level
+    (``ConstraintLeg._isolate``), which leaves the end test below to
+    ``ConstraintLeg._root_pieces``.
 
     ``extra`` holds the derived inputs of ``q`` (:func:`derived_values`), ``pose``
     those of the pose coordinates over the boxes and at their centres
@@ -1559,9 +1562,10 @@ def isolate_level(
     With ``ends = (grid, grid_lo, grid_hi, shift)`` the two ends of row ``r`` of
     ``q`` are the points ``grid[r << shift]`` and ``grid[(r + 1) << shift]``, their
     derived inputs ``grid_lo``, ``grid_hi`` (``(d, g)`` arrays): a final piece of
-    a certified sign where ``F`` (its natural enclosure over the box) is on one
-    side at both ends, so that it holds no root, is left out (counted among its
-    box's pieces all the same), the test of ``ConstraintLeg._root_pieces``.
+    a certified sign that holds no root, ``F`` (its natural enclosure over the box)
+    on that sign's side at the piece's start or on the other side at its end, is
+    left out (counted among its box's pieces all the same): the test of
+    ``ConstraintLeg._root_pieces`` (``constraint_leg._root_free``).
 
     Returns the final pieces (box, lo, hi, sign, finite), those of the next level
     (box, lo, hi, row), whether each final piece was tested at its ends and
