@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -26,7 +26,14 @@ from ..hypertree.tree import HyperTree, to_coordinates
 from ..intervals import Interval
 from ..limits import INSIDE
 from ..mechanisms import Mechanism, from_spec
-from ..mechanisms.base import FOLD_INNER, FOLD_OUTER, REACH_OUT, REACH_UNKNOWN, REGULAR
+from ..mechanisms.base import (
+    FOLD_INNER,
+    FOLD_OUTER,
+    REACH_OUT,
+    REACH_UNKNOWN,
+    REGULAR,
+    leg_reach,
+)
 from ..spec import describe_spec
 from ..types import NO, UNKNOWN, YES, answer, word
 from .flows import (
@@ -657,7 +664,7 @@ def _reachable_contact(
 
     A leg regular over either leaf (a closed box) is regular over the common
     boundary, a part of it: only the other legs are asked, for their statuses
-    alone where they can give them (a leg's ``branches_optional``)."""
+    alone where they can give them (:func:`~moveability.mechanisms.base.leg_reach`)."""
     out = np.zeros(pairs.shape[0], dtype=bool)
     # per leaf first: one gather of a flag per pair end, not of a row
     holds: NDArray[np.bool_] = np.asarray(table.group.any(axis=1), dtype=bool)
@@ -678,11 +685,7 @@ def _reachable_contact(
     for i, leg in enumerate(mechanism.legs):
         ask = np.flatnonzero(real & (status[:, i] != REGULAR))
         if ask.size:
-            status[ask, i] = (
-                cast(Any, leg).reach(lo[ask], hi[ask], branches=False)
-                if getattr(leg, "branches_optional", False)
-                else leg.reach(lo[ask], hi[ask])
-            ).status
+            status[ask, i] = leg_reach(leg, lo[ask], hi[ask], branches=False).status
     regular = status == REGULAR
     folds = (status == FOLD_OUTER) | (status == FOLD_INNER)
     out[idx] = real & (regular | folds).all(axis=1) & ((~regular).sum(axis=1) <= 1)

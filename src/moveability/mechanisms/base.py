@@ -108,6 +108,21 @@ class Leg(Protocol):
     def reach(self, lo: Array, hi: Array) -> LegReach: ...
 
 
+def leg_reach(
+    leg: Leg, lo: Array, hi: Array, *, folds: bool = True, branches: bool = True
+) -> LegReach:
+    """``leg.reach(lo, hi)``, leaving out what the caller does not need where the
+    leg can: its fold certificates (``folds=False``, a leg's ``folds_optional``;
+    they change no box's tree status) and its branches' enclosures
+    (``branches=False``, a leg's ``branches_optional``; the statuses alone)."""
+    options: dict[str, bool] = {}
+    if not folds and getattr(leg, "folds_optional", False):
+        options["folds"] = False
+    if not branches and getattr(leg, "branches_optional", False):
+        options["branches"] = False
+    return cast(Any, leg).reach(lo, hi, **options) if options else leg.reach(lo, hi)
+
+
 def three_points(value: object, name: str) -> tuple[tuple[float, float], ...]:
     """Three points ``[x, y]`` with finite coordinates (a base or a platform triangle).
 
@@ -733,15 +748,9 @@ class Mechanism:
         enclosure as :meth:`det_a_boxes` gives it, computed together. Here each
         leg's ``reach`` and None: det A comes from :meth:`det_a_boxes` per posture.
 
-        ``folds=False``: a leg whose fold certificates are optional (its
-        ``folds_optional``: they change none of the boxes' tree statuses) skips
-        them."""
-        return [
-            cast(Any, leg).reach(lo, hi, folds=False)
-            if not folds and getattr(leg, "folds_optional", False)
-            else leg.reach(lo, hi)
-            for leg in self.legs
-        ], None
+        ``folds=False``: a leg whose fold certificates are optional skips them
+        (:func:`leg_reach`)."""
+        return [leg_reach(leg, lo, hi, folds=folds) for leg in self.legs], None
 
     def identically_singular(self, posture: int) -> bool:
         """Whether det A vanishes on every configuration of a posture (it then holds

@@ -72,7 +72,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -138,6 +138,27 @@ class _Runs:
     end: Interval  # last q of the run (an enclosure, when unwrapped past the circle's cut)
     mono: NDArray[np.int8]  # certified sign of dF/dq over the run, 0 if none
     finite: NDArray[np.bool_]
+
+    def end_pieces(self) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.bool_]]:
+        """Each run's first piece and last piece, and which pieces are one turn on.
+
+        A run unwrapped across the circle's cut starts with the pieces after the
+        cut (their q below its start), moved one turn on: they come first in their
+        box's pieces and end the run. A run's pieces not moved are consecutive, as
+        are those moved, and the runs' indices increase along each kind."""
+        run = self.run_of_piece
+        turned = self.pieces.lo < self.start[run]
+        first = np.empty(self.box.size, dtype=np.intp)
+        last = np.empty(self.box.size, dtype=np.intp)
+        for moved in (False, True):  # the moved pieces' last ends their runs
+            at = np.flatnonzero(turned == moved)
+            of = run[at]
+            edge = np.ones(at.size + 1, dtype=bool)
+            edge[1:-1] = of[1:] != of[:-1]
+            if not moved:
+                first[of[edge[:-1]]] = at[edge[:-1]]
+            last[of[edge[1:]]] = at[edge[1:]]
+        return first, last, turned
 
     def take(self, keep: NDArray[np.intp]) -> _Runs:
         """The runs ``keep`` (increasing indices) and their pieces alone."""
@@ -531,13 +552,16 @@ class ConstraintLeg:
             compiled = self._compiled()
             if compiled is None or self.pieces << level > _TABLE_CAP:
                 memo[level] = None
+            elif level == 0:
+                memo[level] = compiled[1:3] + compiled[3]
             else:
-                prog, q_lo, q_hi = compiled[:3]
-                for _ in range(level):
-                    mid = 0.5 * (q_lo + q_hi)
-                    q_lo = np.stack([q_lo, mid], axis=1).reshape(-1)
-                    q_hi = np.stack([mid, q_hi], axis=1).reshape(-1)
-                memo[level] = (q_lo, q_hi, *tape.derived_values(prog, Interval(q_lo, q_hi)))
+                # the pieces of the level before, each halved
+                q_lo, q_hi = cast(tuple[Array, Array, Any, Any], self._level_table(level - 1))[:2]
+                mid = 0.5 * (q_lo + q_hi)
+                q_lo = np.stack([q_lo, mid], axis=1).reshape(-1)
+                q_hi = np.stack([mid, q_hi], axis=1).reshape(-1)
+                derived = tape.derived_values(compiled[0], Interval(q_lo, q_hi))
+                memo[level] = (q_lo, q_hi, *derived)
         table: tuple[Array, Array, Array, Array] | None = memo[level]
         return table
 
@@ -549,16 +573,13 @@ class ConstraintLeg:
         (the halves of a piece share its middle). None without a table."""
         if "_grid_memo" not in self.__dict__:
             memo = None
-            deepest = -1
-            for level in range(self.depth + 1):
-                if self.pieces << level > _TABLE_CAP:
-                    break
-                deepest = level
+            # the deepest level within the cap (none where the initial pieces exceed it)
+            deepest = min(self.depth, (_TABLE_CAP // self.pieces).bit_length() - 1)
             table = self._level_table(deepest) if deepest >= 0 else None
-            compiled = self._compiled()
-            if table is not None and compiled is not None:
+            if table is not None:
                 points = np.append(table[0], table[1][-1])
-                values = tape.derived_values(compiled[0], ex.points(points))
+                prog = cast(tuple[Any, ...], self._compiled())[0]
+                values = tape.derived_values(prog, ex.points(points))
                 memo = (points, *values, deepest)
             self.__dict__["_grid_memo"] = memo
         grid: tuple[Array, Array, Array, int] | None = self.__dict__["_grid_memo"]
@@ -747,24 +768,13 @@ class ConstraintLeg:
         lower end of its first piece, and its end the upper end of its last one
         (a run unwrapped across the circle's cut ends one turn on, computed):
         their values from :meth:`_piece_ends`."""
-        pieces, run = runs.pieces, runs.run_of_piece
-        n_runs = runs.box.size
-        # the pieces of a run not moved one turn on: consecutive, in run order
-        plain = np.flatnonzero(pieces.lo >= runs.start[run])
-        of = run[plain]
-        edge = np.ones(plain.size + 1, dtype=bool)
-        edge[1:-1] = of[1:] != of[:-1]
-        first, last = plain[edge[:-1]], plain[edge[1:]]
-        if first.size != n_runs or not np.array_equal(of[edge[:-1]], np.arange(n_runs)):
-            starts = self._box_eval(self.f, lo, hi, runs.box, ex.points(runs.start))
-            return starts, self._box_eval(self.f, lo, hi, runs.box, runs.end)
-        f_start = self._piece_ends(lo, hi, pieces, first, upper=False)
-        f_end = self._piece_ends(lo, hi, pieces, last, upper=True)
-        end = pieces.hi[last]
-        turned = np.flatnonzero((runs.end.lo != end) | (runs.end.hi != end))
-        if turned.size:
-            v = self._box_eval(self.f, lo, hi, runs.box[turned], runs.end[turned])
-            f_end.lo[turned], f_end.hi[turned] = v.lo, v.hi
+        first, last, turned = runs.end_pieces()
+        f_start = self._piece_ends(lo, hi, runs.pieces, first, upper=False)
+        f_end = self._piece_ends(lo, hi, runs.pieces, last, upper=True)
+        wrapped = np.flatnonzero(turned[last])
+        if wrapped.size:
+            v = self._box_eval(self.f, lo, hi, runs.box[wrapped], runs.end[wrapped])
+            f_end.lo[wrapped], f_end.hi[wrapped] = v.lo, v.hi
         return f_start, f_end
 
     def _reach(
@@ -856,23 +866,11 @@ class ConstraintLeg:
         end = runs.end.hi[r].copy()
         pieces = runs.pieces
         run = runs.run_of_piece
-        # a box of one run: its pieces are the run's, in q order. A run unwrapped
-        # across the circle's cut starts with pieces after the cut (their q below
-        # its start), which come last, one turn on
-        after = pieces.lo < runs.start[run]
-        box_r = runs.box[r]
-        begin = np.searchsorted(pieces.box, box_r)
-        stop = np.searchsorted(pieces.box, box_r, side="right")
-        counted = np.concatenate([[0], np.cumsum(after)])
-        n_after = counted[stop] - counted[begin]
-        first = begin + n_after
-        last = np.where(n_after > 0, begin + n_after - 1, stop - 1)
+        first, last, turned = runs.end_pieces()
         for side, f in ((-1, ends[0]), (1, ends[1])):
-            at = first if side < 0 else last
-            ok = (at >= begin) & (at < stop)
-            at = np.where(ok, at, 0)
+            at = (first if side < 0 else last)[r]
             mono = pieces.mono[at]
-            ok &= pieces.finite[at] & (mono != 0) & _on_side(mono.astype(np.float64), side, f)
+            ok = pieces.finite[at] & (mono != 0) & _on_side(mono.astype(np.float64), side, f)
             idx = np.flatnonzero(ok)
             if not idx.size:
                 continue
@@ -880,7 +878,7 @@ class ConstraintLeg:
             # by the contraction (its other bound, not certified, is not used)
             p_lo, p_hi = pieces.lo[at[idx]], pieces.hi[at[idx]]
             box = runs.box[r[idx]]
-            wrapped = after[at[idx]]
+            wrapped = turned[at[idx]]
             own = _Runs(
                 pieces, run, box, p_lo.copy(), Interval(p_hi.copy()), mono[idx],
                 np.ones(idx.size, dtype=bool),
