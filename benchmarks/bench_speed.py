@@ -619,8 +619,8 @@ def case_three_rpr(parts: int) -> None:
     print(
         f"  (a floor, not a target: the tree built as analyze builds it, its "
         f"{cells['cells']} cells' reaches, limits and det A\n   enclosed on intervals, "
-        f"{cells['enclosures']:.2f} s of it in the enclosures; no region, connectivity, "
-        f"count or output)"
+        f"{cells['enclosures']:.2f} s of it in the enclosures, {cells['undecided']} leaves "
+        f"undecided at the precision;\n   no region, connectivity, count or output)"
     )
     count = plain["count"]
     print(
