@@ -351,6 +351,37 @@ def test_bad_precision(fake, spec, points, precision):
     assert fake["analyses"] == []
 
 
+@pytest.mark.parametrize("growth", ["-1", "nan", "inf", "abc", ""])
+def test_bad_resolve_growth(fake, spec, points, growth):
+    for command in (["regions", spec], ["locate", spec, points], ["feasible", spec, points]):
+        assert_bad_input(run([*command, "--resolve-growth", growth]), "--resolve-growth")
+    assert fake["analyses"] == []
+
+
+def test_resolve_growth_reaches_the_analysis(monkeypatch, spec):
+    """``--resolve-growth`` is passed to ``analyze`` as ``resolve_growth``; without
+    it ``analyze``'s default stands (no keyword), and the help says that default."""
+    import moveability.analysis.result as result_module
+
+    seen = []
+
+    def record(mechanism, precision, **kwargs):
+        seen.append(kwargs)
+        raise ResolutionError("precision", "a tree that fits in memory", precision)
+
+    monkeypatch.setattr(result_module, "analyze", record)
+    run(["regions", spec, "--resolve-growth", "16"])
+    run(["regions", spec])
+    run(["regions", spec, "--no-resolve", "--resolve-growth", "2.5"])
+    assert seen[0]["resolve_growth"] == 16.0 and seen[0]["resolve"] is True
+    assert "resolve_growth" not in seen[1]
+    assert seen[2]["resolve_growth"] == 2.5 and seen[2]["resolve"] is False
+    helped = " ".join(run(["regions", "-h"]).stdout.split())
+    assert f"[default: {result_module.RESOLVE_GROWTH:g}]" in helped
+    # a sweep keeps the default budget: it offers no option it would ignore
+    assert "--resolve-growth" not in run(["sweep", "-h"]).stdout
+
+
 def test_precision_too_fine_for_memory(monkeypatch, fake, spec):
     def refuse(mechanism, precision, progress):
         raise ResolutionError("precision", "a tree that fits in memory", precision)

@@ -274,7 +274,7 @@ def test_det_a_of_every_posture_shares_the_legs_rows(name, monkeypatch):
     """``det_a_postures`` of mechanisms whose det A is the determinant of the legs'
     rows computes a leg's rows on a branch once for every posture that takes it:
     the enclosures of ``det_a_boxes`` posture by posture, bit for bit, from one
-    ``a_row_boxes`` call per leg and branch."""
+    ``a_row_boxes`` call over the boxes per leg and branch."""
     from moveability import load_spec
     from moveability.mechanisms import from_spec
     from moveability.mechanisms.constraint_leg import ConstraintLeg
@@ -291,7 +291,10 @@ def test_det_a_of_every_posture_shares_the_legs_rows(name, monkeypatch):
     plain = ConstraintLeg.a_row_boxes
 
     def counted(self, *args):
-        calls.append(self)
+        # the rows over the boxes (det A along the sheets also takes the rows at
+        # the middles of the boxes where it applies, see sheet_det)
+        if args[0] is lo:
+            calls.append(self)
         return plain(self, *args)
 
     monkeypatch.setattr(ConstraintLeg, "a_row_boxes", counted)

@@ -16,6 +16,8 @@ __all__ = [
     "json_options",
     "points_argument",
     "precision_option",
+    "resolve_flag_option",
+    "resolve_growth",
     "resolve_option",
     "spec_argument",
     "wants_resolution",
@@ -93,6 +95,7 @@ def points_argument(command: F) -> F:
 
 
 _RESOLVE = "moveability.resolve"
+_GROWTH = "moveability.resolve_growth"
 
 
 def wants_resolution() -> bool:
@@ -102,6 +105,53 @@ def wants_resolution() -> bool:
 
 
 def resolve_option(command: F) -> F:
+    """``--resolve/--no-resolve`` (:func:`resolve_flag_option`) and ``--resolve-growth
+    FACTOR``: the leaves the refinement may add, as a multiple of the plain pass's
+    (``analyze``'s ``resolve_growth``; see :func:`resolve_growth`)."""
+
+    def remember(context: click.Context, _param: click.Parameter, value: Any) -> Any:
+        if value is not None:
+            context.meta[_GROWTH] = value
+        return value
+
+    command = click.option(
+        "--resolve-growth",
+        type=_Growth(),
+        default=None,
+        expose_value=False,
+        is_eager=True,
+        callback=remember,
+        help="Leaves the refinement below the precision may add, as a multiple of the "
+        "leaves of the plain pass (at least 32768, within memory)  [default: 4]; a larger "
+        "factor may decide a count or an N-connectivity the default leaves open.",
+    )(command)
+    return resolve_flag_option(command)
+
+
+def resolve_growth() -> float | None:
+    """The running command's ``--resolve-growth``; None where it was not given."""
+    context = click.get_current_context(silent=True)
+    return None if context is None else context.meta.get(_GROWTH)
+
+
+class _Growth(click.ParamType):
+    """A finite number >= 0; a bad value is an :class:`~moveability.errors.InputError`."""
+
+    name = "FACTOR"
+
+    def convert(
+        self, value: Any, param: click.Parameter | None, ctx: click.Context | None
+    ) -> float:
+        try:
+            growth = float(value)
+        except (TypeError, ValueError):
+            growth = math.nan
+        if not (math.isfinite(growth) and growth >= 0):
+            raise InputError(f"invalid --resolve-growth: expected a number >= 0, got {value!r}")
+        return growth
+
+
+def resolve_flag_option(command: F) -> F:
     """``--resolve/--no-resolve``: refine below the precision where the count is open."""
 
     def remember(context: click.Context, _param: click.Parameter, value: bool) -> bool:

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from ..errors import InputError, InvalidParameterError, MoveabilityError
 from ..poses import read_points
-from .options import wants_resolution
+from .options import resolve_growth, wants_resolution
 
 __all__ = [
     "LoggedProgress",
@@ -204,6 +204,9 @@ def run_analysis(
     from ..analysis.result import analyze
 
     options.setdefault("resolve", wants_resolution())
+    growth = resolve_growth()
+    if growth is not None:
+        options.setdefault("resolve_growth", growth)
     try:
         return analyze(mechanism, precision=precision, progress=progress, **options)
     finally:

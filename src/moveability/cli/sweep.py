@@ -105,7 +105,7 @@ def _check_jobs(jobs: int | None, scheduler: str | None) -> int:
     default=None,
     help="Also draw the map of the number of regions over the two names that vary.",
 )
-@options.resolve_option
+@options.resolve_flag_option
 def sweep_command(
     spec: str,
     vary: tuple[str, ...],

@@ -91,6 +91,8 @@ Function = Callable[..., Any]
 
 _TWO_PI = Interval(np.nextafter(2 * np.pi, 0.0), np.nextafter(2 * np.pi, np.inf))
 _INF = np.inf
+#: Newton's steps in floats towards a root at a point (see root_enclosure)
+_NEWTON_STEPS = 3
 #: the most pieces of an isolation level whose derived inputs are kept in a table
 #: (:meth:`ConstraintLeg._level_table`)
 _TABLE_CAP = 1 << 14
@@ -198,6 +200,11 @@ class ConstraintLeg:
     pieces, depth, max_pieces : int
         Initial pieces of the search range, bisections of a piece, and pieces
         per box beyond which a box is no longer refined.
+    d2f_dxdx, d2f_dqdx : optional
+        ``d2F/dX_j dX_k`` (``d2f_dxdx[j][k]``) and ``d2F/dq dX_j``, same
+        signature: the derivatives of the leg's row of A. With both, the
+        mechanism's det A may be enclosed along the sheets
+        (:mod:`moveability.mechanisms.sheet_det`, :meth:`sheet_rates`).
 
     Examples
     --------
@@ -234,6 +241,8 @@ class ConstraintLeg:
     pieces: int = 32
     depth: int = 8
     max_pieces: int = 64
+    d2f_dxdx: Sequence[Sequence[Function]] | None = None
+    d2f_dqdx: Sequence[Function] | None = None
     _range: tuple[float, float] = field(init=False, repr=False)
 
     n_branches = 2
@@ -259,10 +268,16 @@ class ConstraintLeg:
 
     # ---------------------------------------------------------------- points
     def _call(self, g: Function, points: Array, angles: Array) -> Array:
+        """``g`` at poses and joint values, broadcast to their common shape (a
+        function that does not depend on them, such as a derivative that is a
+        constant, gives that shape too)."""
         p = np.asarray(points, dtype=np.float64)
         coords = [p[..., j] for j in range(p.shape[-1])]
+        q = np.asarray(angles, dtype=np.float64)
+        shape = np.broadcast_shapes(p.shape[:-1], q.shape)
         with _quiet():
-            return np.asarray(g(*coords, np.asarray(angles, dtype=np.float64)), dtype=np.float64)
+            value = np.asarray(g(*coords, q), dtype=np.float64)
+        return np.array(np.broadcast_to(value, shape))
 
     def constraint(self, points: Array, angles: Array) -> Array:
         """``F(X, q)`` at poses and joint values."""
@@ -275,6 +290,75 @@ class ConstraintLeg:
     def a_row(self, points: Array, angles: Array) -> Array:
         """The leg's row of A, ``dF/dX``, shape (..., k)."""
         return np.stack([self._call(g, points, angles) for g in self.df_dx], axis=-1)
+
+    # ------------------------------------------------- along the sheet (sheet_det)
+    @property
+    def second_derivatives(self) -> tuple[Sequence[Sequence[Function]], Sequence[Function]] | None:
+        """``(d2f_dxdx, d2f_dqdx)`` where both were given, else None."""
+        if self.d2f_dxdx is None or self.d2f_dqdx is None:
+            return None
+        return self.d2f_dxdx, self.d2f_dqdx
+
+    def monotone_root(self, lo: Array, hi: Array, angles: Interval) -> NDArray[np.int8]:
+        """Per box: 1 where ``F`` certainly rises in ``q`` over the box and the
+        enclosure ``angles``, negative at its lower end and positive at its upper
+        one; -1 the same falling; 0 otherwise. Where it is not 0 every pose of the
+        box has exactly one root in ``angles``, a C^1 function of the pose."""
+        box = np.arange(lo.shape[0])
+        with tape.remembered_boxes(), _quiet():
+            slope = self._box_eval(self.df_dq, lo, hi, box, angles)
+            start = self._box_eval(self.f, lo, hi, box, Interval(angles.lo))
+            end = self._box_eval(self.f, lo, hi, box, Interval(angles.hi))
+        up = (slope.lo > 0) & (start.hi < 0) & (end.lo > 0)
+        down = (slope.hi < 0) & (start.lo > 0) & (end.hi < 0)
+        return up.astype(np.int8) - down.astype(np.int8)
+
+    def root_enclosure(
+        self, points: Array, angles: Interval, rising: NDArray[np.bool_]
+    ) -> Interval:
+        """A narrow enclosure of the root in ``angles`` at each pose of ``points``
+        (m, k), where ``F`` is monotone there (rising where ``rising``, see
+        :meth:`monotone_root`): Newton's steps in floats from the middle of
+        ``angles``, kept inside it, then a few ulps about the point reached,
+        certified where ``F`` has the signs of the two sides of a root at its
+        ends; ``angles`` itself where it does not."""
+        lo = np.array(angles.lo, dtype=np.float64)
+        hi = np.array(angles.hi, dtype=np.float64)
+        q = 0.5 * (lo + hi)
+        with _quiet():
+            for _ in range(_NEWTON_STEPS):
+                step = self._call(self.f, points, q) / self._call(self.df_dq, points, q)
+                q = np.clip(np.where(np.isfinite(step), q - step, q), lo, hi)
+            pad = 64 * np.spacing(np.abs(q)) + 1e-300
+            below, above = np.maximum(q - pad, lo), np.minimum(q + pad, hi)
+            box = np.arange(points.shape[0])
+            f_below = self._box_eval(self.f, points, points, box, Interval(below))
+            f_above = self._box_eval(self.f, points, points, box, Interval(above))
+        up = (f_below.hi < 0) & (f_above.lo > 0)
+        down = (f_below.lo > 0) & (f_above.hi < 0)
+        ok = np.where(rising, up, down)
+        return Interval(np.where(ok, below, lo), np.where(ok, above, hi))
+
+    def sheet_rates(
+        self, lo: Array, hi: Array, angles: Interval
+    ) -> tuple[list[Interval], list[list[Interval]], list[Interval]]:
+        """Over boxes of poses and joint enclosures: the joint's gradient along the
+        sheet ``dq/dX_j = -(dF/dX_j) / (dF/dq)`` (the whole line where ``dF/dq``
+        may vanish), and the derivatives of the leg's row of A, ``dF/dX``, along
+        the pose axes (``[entry][axis]``) and along the joint.
+
+        Raises ``ValueError`` where the second derivatives were not given."""
+        given = self.second_derivatives
+        if given is None:
+            raise ValueError(f"leg {self.joint!r}: no second derivatives")
+        d2f_dxdx, d2f_dqdx = given
+        box = np.arange(lo.shape[0])
+        with tape.remembered_boxes(), _quiet():
+            serial = self._box_eval(self.df_dq, lo, hi, box, angles)
+            gradient = [-(self._box_eval(g, lo, hi, box, angles) / serial) for g in self.df_dx]
+            along_x = [[self._box_eval(g, lo, hi, box, angles) for g in row] for row in d2f_dxdx]
+            along_q = [self._box_eval(g, lo, hi, box, angles) for g in d2f_dqdx]
+        return gradient, along_x, along_q
 
     def a_row_boxes(self, lo: Array, hi: Array, angles: Interval) -> list[Interval]:
         """Enclosures of ``dF/dX_j`` over boxes of poses and joint enclosures."""
