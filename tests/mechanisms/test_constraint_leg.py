@@ -11,6 +11,7 @@ the roots meet.
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -407,3 +408,20 @@ def test_run_ends_from_the_isolation_are_those_evaluated(source):
         total += runs.box.size
     assert wrapped > 0  # runs across the cut among them
     assert reused > total // 4
+
+
+@pytest.mark.parametrize("name", ["five-bar-custom.toml", "three-rrr.toml", "delta-custom.toml"])
+def test_reach_over_no_box(name):
+    """No box: empty statuses, branches, hull and fold certificates, for every leg
+    (the isolation is not run)."""
+    from moveability import load_spec
+    from moveability.mechanisms import from_spec
+
+    m = from_spec(load_spec(Path(__file__).resolve().parents[2] / "examples" / name))
+    k = len(m.pose_names)
+    for leg in m.legs:
+        for options in ({}, {"folds": False}, {"branches": False}):
+            reach = leg.reach(np.zeros((0, k)), np.zeros((0, k)), **options)
+            assert reach.status.shape == (0,) and reach.fold_connected.shape == (0,)
+            assert reach.hull.lo.shape == (0,)
+            assert all(b.lo.shape == (0,) and b.hi.shape == (0,) for b in reach.branches)

@@ -308,3 +308,27 @@ def test_det_a_of_every_posture_shares_the_legs_rows(name, monkeypatch):
         assert np.array_equal(every[p].hi, one.hi, equal_nan=True)
         finite += int(np.isfinite(one.lo).sum())
     assert finite > 100  # regular boxes among them: enclosures, not the whole line
+
+
+def test_atan2_with_a_constant_second_argument():
+    """sympy writes ``atan2(u, 3)`` as ``atan(u/3)``: the spec is accepted (the same
+    angle, printed as ``atan2(u/3, 1)``) and the leg's roots are those of the
+    constraint as written (here ``r1 = x - 1``)."""
+    spec = {
+        "mechanism": "custom",
+        "pose": ["x", "y"],
+        "joints": ["r1", "r2"],
+        "legs": [
+            {"joint": "r1", "kind": "prismatic", "constraint": "atan2(x - r1, 3) - atan2(1, 3)"},
+            {"joint": "r2", "kind": "prismatic", "constraint": "(x - r2)**2 + y**2 - 4"},
+        ],
+        "limits": {"r1": [-10.0, 10.0], "r2": [-10.0, 10.0]},
+        "bounds": {"x": [-5.0, 5.0], "y": [-3.0, 3.0]},
+    }
+    m = CustomMechanism(normalise_custom_spec(spec))
+    points = np.array([[0.5, 0.2], [2.0, -1.0], [-4.0, 2.5]])
+    roots = m.legs[0].angles(points)
+    found = roots[np.isfinite(roots)]
+    assert np.allclose(np.sort(found), np.sort(points[:, 0] - 1.0))
+    result = analyze(spec, precision=1.0, resolve=False)
+    assert result.count[0] >= 1

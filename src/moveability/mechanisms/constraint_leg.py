@@ -791,6 +791,15 @@ class ConstraintLeg:
         the whole line (for callers that need the statuses alone)."""
         lo = np.asarray(lo, dtype=np.float64)
         hi = np.asarray(hi, dtype=np.float64)
+        if not lo.shape[0]:
+            # no box: nothing to isolate
+            none = Interval(np.zeros(0), np.zeros(0))
+            return LegReach(
+                status=np.zeros(0, dtype=np.uint8),
+                branches=[none, Interval(np.zeros(0), np.zeros(0))],
+                hull=Interval(np.zeros(0), np.zeros(0)),
+                fold_connected=np.zeros(0, dtype=bool),
+            )
         # derived inputs of the pose (sin and cos of an angle, ...) once per box
         with tape.remembered_boxes():
             return self._reach(lo, hi, folds, branches)

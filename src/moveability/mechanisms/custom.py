@@ -286,6 +286,10 @@ class _Printer:
         }
         if isinstance(e, sympy.Function) and e.func in names:
             return f"{names[e.func]}(" + ", ".join(self(a) for a in e.args) + ")"
+        if isinstance(e, sympy.atan):
+            # sympy writes atan2(u, c) with a constant c > 0 as atan(u / c): the same
+            # angle as atan2(u / c, 1), for every real u
+            return f"atan2({self(e.args[0])}, 1)"
         if isinstance(e, sympy.Function) and e.func == _atan2_turn():
             return "atan2_turn(" + ", ".join(self(a) for a in e.args) + ")"
         if isinstance(e, sympy.sign):
