@@ -277,7 +277,7 @@ class ConstraintLeg:
         shape = np.broadcast_shapes(p.shape[:-1], q.shape)
         with _quiet():
             value = np.asarray(g(*coords, q), dtype=np.float64)
-        return np.array(np.broadcast_to(value, shape))
+        return value if value.shape == shape else np.array(np.broadcast_to(value, shape))
 
     def constraint(self, points: Array, angles: Array) -> Array:
         """``F(X, q)`` at poses and joint values."""

@@ -98,29 +98,27 @@ def det_along_sheets(
 
 
 class _LegTerms:
-    """What the form needs of one leg on one branch over some boxes (``at``): the
-    sense of ``F`` in the joint (0: the conditions fail), the root at the
-    middle of each box, the joint's gradient and the derivatives of the row."""
+    """What the form needs of one leg on one branch over the boxes ``need``: at the
+    boxes where the leg's conditions hold, the root at the middle of each box,
+    the joint's gradient and the derivatives of the row; ``row[box]`` is the
+    box's row in them (-1: not needed, or the conditions fail)."""
 
     def __init__(
-        self, leg: Any, lo: Array, hi: Array, angle: Interval, at: NDArray[np.intp]
+        self, leg: Any, lo: Array, hi: Array, angle: Interval, need: NDArray[np.bool_]
     ) -> None:
-        self.at = at
-        box_lo, box_hi = lo[at], hi[at]
+        at = np.flatnonzero(need)
         q = Interval(angle.lo[at], angle.hi[at])
-        self.sense = leg.monotone_root(box_lo, box_hi, q)
-        ok = self.sense != 0
-        self.ok = ok
-        keep = np.flatnonzero(ok)
-        # the terms of the boxes where the conditions hold, by position in at
-        self.row_of = np.full(at.size, -1, dtype=np.intp)
-        self.row_of[keep] = np.arange(keep.size)
+        sense = leg.monotone_root(lo[at], hi[at], q)
+        keep = sense != 0
+        at = at[keep]
+        self.row = np.full(lo.shape[0], -1, dtype=np.intp)
+        self.row[at] = np.arange(at.size)
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-            lo_k, hi_k = box_lo[keep], box_hi[keep]
+            lo_k, hi_k = lo[at], hi[at]
             q_k = Interval(q.lo[keep], q.hi[keep])
             centre = 0.5 * (lo_k + hi_k)
-            self.centre_q = leg.root_enclosure(centre, q_k, self.sense[keep] > 0)
-            self.centre_row = leg.a_row_boxes(centre, centre, self.centre_q)
+            centre_q = leg.root_enclosure(centre, q_k, sense[keep] > 0)
+            self.centre_row = leg.a_row_boxes(centre, centre, centre_q)
             self.gradient, self.along_x, self.along_q = leg.sheet_rates(lo_k, hi_k, q_k)
 
 
@@ -164,7 +162,7 @@ def dets_along_sheets(
             if need.any():
                 angle = branch_angles[i][b]
                 assert angle is not None
-                terms[i, b] = _LegTerms(legs[i], lo, hi, angle, np.flatnonzero(need))
+                terms[i, b] = _LegTerms(legs[i], lo, hi, angle, need)
     out = []
     for branches, natural, use in zip(postures, naturals, wanted, strict=True):
         legs_terms = [terms.get((i, int(b))) for i, b in enumerate(branches)]
@@ -172,17 +170,12 @@ def dets_along_sheets(
             out.append(natural)
             continue
         # the boxes where every leg's conditions hold, and each one's term rows
-        position = []
-        for t in legs_terms:
-            assert t is not None
-            where = np.full(n, -1, dtype=np.intp)
-            where[t.at] = t.row_of
-            position.append(where)
-        at = np.flatnonzero(use & np.logical_and.reduce([w >= 0 for w in position]))
+        found_terms = [t for t in legs_terms if t is not None]
+        at = np.flatnonzero(use & np.logical_and.reduce([t.row >= 0 for t in found_terms]))
         if not at.size:
             out.append(natural)
             continue
-        found = [(t, w[at]) for t, w in zip(legs_terms, position, strict=True)]
+        found = [(t, t.row[at]) for t in found_terms]
         out.append(
             _narrowed(mechanism, lo, hi, branches, branch_angles, rows, natural, at, found)
         )
