@@ -356,7 +356,12 @@ class ConstraintLeg:
         with tape.remembered_boxes(), _quiet():
             serial = self._box_eval(self.df_dq, lo, hi, box, angles)
             gradient = [-(self._box_eval(g, lo, hi, box, angles) / serial) for g in self.df_dx]
-            along_x = [[self._box_eval(g, lo, hi, box, angles) for g in row] for row in d2f_dxdx]
+            # a function given twice (the symmetric second derivatives) evaluated once
+            seen: dict[int, Interval] = {}
+            for g in (g for row in d2f_dxdx for g in row):
+                if id(g) not in seen:
+                    seen[id(g)] = self._box_eval(g, lo, hi, box, angles)
+            along_x = [[seen[id(g)] for g in row] for row in d2f_dxdx]
             along_q = [self._box_eval(g, lo, hi, box, angles) for g in d2f_dqdx]
         return gradient, along_x, along_q
 

@@ -813,10 +813,10 @@ def _second_derivative_bodies(
     f: sympy.Expr, pose: list[sympy.Symbol], q: sympy.Symbol, printer: _Printer, i: int
 ) -> dict[str, str]:
     """The derivatives of leg ``i``'s row of A (``dF/dX``), printed:
-    ``"{i}.d2f_dxdx.{j}.{k}"`` (``d2F/dX_j dX_k``) and ``"{i}.d2f_dqdx.{j}"``
-    (``d2F/dq dX_j``); none where one cannot be printed (the Dirac delta of a
-    differentiated ``abs`` or ``sign``): det A is then enclosed on intervals
-    alone (see :mod:`.sheet_det`).
+    ``"{i}.d2f_dxdx.{j}.{k}"`` (``d2F/dX_j dX_k``, ``j <= k``: the same as
+    ``d2F/dX_k dX_j``) and ``"{i}.d2f_dqdx.{j}"`` (``d2F/dq dX_j``); none where
+    one cannot be printed (the Dirac delta of a differentiated ``abs`` or
+    ``sign``): det A is then enclosed on intervals alone (see :mod:`.sheet_det`).
 
     Only prismatic legs are given them. A slider's joint moves about as fast as
     the pose, so over a cell its enclosure is about as wide as the cell, and the
@@ -831,7 +831,7 @@ def _second_derivative_bodies(
         for j, xj in enumerate(pose):
             row = sympy.diff(f, xj)
             out[f"{i}.d2f_dqdx.{j}"] = printer(sympy.diff(row, q))
-            for k, xk in enumerate(pose):
+            for k, xk in enumerate(pose[j:], start=j):
                 out[f"{i}.d2f_dxdx.{j}.{k}"] = printer(sympy.diff(row, xk))
     except SpecError:
         return {}
@@ -1104,12 +1104,15 @@ class CustomMechanism(Mechanism):
             q_name = leg["joint"]
             d2f_dxdx = d2f_dqdx = None
             if f"{i}.d2f_dqdx.0" in bodies:
-                d2f_dxdx = tuple(
-                    tuple(
-                        bind(f"{i}.d2f_dxdx.{j}.{c}", f"d2{key}/d{x}d{y}")
-                        for c, y in enumerate(s["pose"])
-                    )
+                # symmetric: one function for (j, c) and (c, j)
+                upper = {
+                    (j, c): bind(f"{i}.d2f_dxdx.{j}.{c}", f"d2{key}/d{x}d{y}")
                     for j, x in enumerate(s["pose"])
+                    for c, y in enumerate(s["pose"])
+                    if j <= c
+                }
+                d2f_dxdx = tuple(
+                    tuple(upper[min(j, c), max(j, c)] for c in range(k)) for j in range(k)
                 )
                 d2f_dqdx = tuple(
                     bind(f"{i}.d2f_dqdx.{j}", f"d2{key}/d{q_name}d{x}")
