@@ -280,6 +280,41 @@ def test_n_connected_five_bars_are_certified(lengths):
     assert connected and in_w > 1000
 
 
+#: a free joint and one cut to a window with no parallel singularity inside: two
+#: regions (one per sign of det A), each covering W
+CUT_FIVE_BARS = [
+    ((7.0, 8.0, 6.0, 8.0, 6.0), None, (np.pi - 0.3, np.pi + 0.3)),
+    # the window's stop meets the fold of leg 2 at a corner of W
+    ((4.963394392442056, 9.591314443216636, 5.499062323188824, 4.82705762364168,
+      6.5819210681384), None, (2.8207963021201756, 3.6188549832220005)),
+    ((3.47, 1.06, 6.81, 7.48, 7.46), (1.92, 3.37), WHOLE_TURN),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("design", CUT_FIVE_BARS, ids=lambda d: repr(d[0][:3]))
+@pytest.mark.parametrize("precision", [0.1, 0.05])
+def test_n_connected_is_certified_where_a_joint_limit_cuts_w(design, precision):
+    m = five_bar(*design)
+    result = analyze(m, precision=precision)
+    assert result.count == (2, 2)
+    assert result.n_connected is True
+    assert [r.equals_workspace for r in result.regions] == [True, True]
+    connected, in_w = joint_space_n_connected(m, 600, 300)
+    assert connected and in_w > 1000
+    # every pose of W sampled has a valid configuration of each sign
+    lo, hi = m.pose_box()
+    points = np.random.default_rng(5).uniform(lo, hi, (20000, 2))
+    q = m.joint_angles(points)
+    valid = np.isfinite(q).all(axis=2)
+    for i, limit in enumerate(m.limits):
+        valid &= limit.contains(np.nan_to_num(q[:, :, i]))
+    det = m.det_a(np.repeat(points, q.shape[1], axis=0), q.reshape(-1, 2)).reshape(valid.shape)
+    in_w = valid.any(axis=1)
+    assert in_w.sum() > 1000
+    for s in (1, -1):
+        assert (valid & (np.sign(det) == s)).any(axis=1)[in_w].all()
+
+
 def test_not_n_connected_is_certified_with_a_witness():
     """W is not N-connected: some pose of W has no configuration in a region."""
     m = five_bar((2.2, 5.7, 5.3, 5.5, 7.5), WHOLE_TURN, WHOLE_TURN)

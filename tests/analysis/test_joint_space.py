@@ -10,11 +10,20 @@ designs that need them (equal distal links, free joints); and the count as
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from moveability import analyze, load_analysis, save_analysis
 from moveability.analysis.flows import into_corner
-from moveability.analysis.joint_space import count_in_joint_space, has_dyads
-from moveability.mechanisms import FiveBar, from_spec
+from moveability.analysis.joint_space import (
+    count_in_joint_space,
+    has_dyads,
+    joint_condition,
+    witness_configurations,
+)
+from moveability.hypertree.status import IN
+from moveability.intervals import Interval
+from moveability.limits import JointLimit
+from moveability.mechanisms import Delta, FiveBar, from_spec
 from region_references import (
     EQUAL_BIGLIDE,
     GAP_FIVE_BAR,
@@ -180,3 +189,86 @@ def test_direction_into_a_corner():
     # dependent normals fall back to the sum; inactive rows are zero
     flat = np.array([[[1.0, 0.0], [1.0, 0.0], [0.0, 0.0]]])
     assert np.allclose(into_corner(flat)[0], [2.0, 0.0])
+
+
+# ------------------------------------------------------- witnesses and notes
+def _joint_box_of(m):
+    lo = np.array([lim.lo for lim in m.limits])
+    hi = np.array([lim.lo + 2 * np.pi if lim.periodic else lim.hi for lim in m.limits])
+    return lo, hi
+
+
+@pytest.mark.parametrize(
+    "m",
+    [
+        FiveBar(7, 8, 5, 8, 5),
+        FiveBar(2.0, 4.0, 4.0, 3.0, 4.0),
+        Delta(),
+        Delta(10.0, 4.0, 8.0, 10.0),
+        from_spec(
+            {
+                "mechanism": "biglide",
+                "parameters": {"L1": 5.0, "L2": 4.0},
+                "limits": {"rho1": [-6, 6], "rho2": [-6, 6]},
+            }
+        ),
+    ],
+    ids=lambda m: m.name,
+)
+def test_witness_configurations_are_configurations_of_each_sign(m):
+    """Forward kinematics at random joints: both poses satisfy every leg's
+    constraint at those joints, with det A of opposite signs; none where D
+    does not hold the joints."""
+    lo, hi = _joint_box_of(m)
+    q = np.random.default_rng(4).uniform(lo, hi, (500, lo.size))
+    poses, signs = witness_configurations(m, q)
+    found = np.isfinite(poses).all(axis=(1, 2))
+    assert found.sum() >= 10
+    qq = np.repeat(q[found], 2, axis=0)
+    residual = m.constraints(poses[found].reshape(qq.shape[0], -1), qq)
+    scale = max(float(np.abs(poses[found]).max()), 1.0) ** 2
+    assert np.abs(residual).max() < 1e-9 * scale
+    assert (signs[found].sum(axis=1) == 0).all() and (signs[found] != 0).all()
+    condition = joint_condition(m)
+    inside = condition.classify(q, q) == IN
+    assert found[inside].all()
+
+
+def test_witnesses_stand_for_every_component_of_a_decided_count():
+    m = Delta(10.0, 4.0, 8.0, 10.0, tuple(JointLimit(-np.pi / 2, np.pi / 2) for _ in range(3)))
+    found = count_in_joint_space(m)
+    assert found.decided and found.witnesses.shape == (found.at_least // 2, 3)
+    condition = joint_condition(m)
+    w = found.witnesses
+    assert (condition.classify(w, w) == IN).all()  # each in D
+    lo, hi = _joint_box_of(m)
+    assert ((w > lo) & (w < hi)).all()  # strictly within the limits
+
+
+def test_a_corner_of_the_limits_on_a_parallel_singularity_is_named():
+    """theta1's stop and theta2's stop meet exactly on the singular curve: the
+    count stays open about that corner alone, and the output says so."""
+    m = from_spec(
+        {
+            "mechanism": "five-bar",
+            "parameters": {"L0": 5.9, "L1": 3.3, "L2": 5.3, "L3": 6.3, "L4": 5.3},
+            "limits": {
+                "theta1": [-3.652828432061323, -2.82],
+                "theta2": [-1.5429887555960375, 1.925532188225774],
+            },
+        }
+    )
+    found = count_in_joint_space(m)
+    assert not found.decided
+    (note,) = found.notes
+    assert note.startswith("degenerate design") and "theta1 = -2.82" in note
+    # the corner is on the singular curve: |C1 C2| = L2 + L4 there
+    (k1, _, _), (k2, _, _) = (
+        leg.knee_boxes(Interval(np.array([v])))
+        for leg, v in zip(m.legs, (-2.82, -1.5429887555960375), strict=True)
+    )
+    d = np.hypot(k1[0].lo - k2[0].lo, k1[1].lo - k2[1].lo)[0]
+    assert d == pytest.approx(5.3 + 5.3, abs=1e-9)
+    result = analyze(m, precision=0.1)
+    assert result.notes == found.notes and result.to_dict()["notes"] == [note]
+    assert note in result.summary()

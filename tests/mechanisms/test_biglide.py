@@ -13,13 +13,18 @@ poses by testing, pose by pose, the postures of the region's sign.
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
 
 from moveability import analyze, default_poses, plan_motion
+from moveability.analysis.joint_space import count_in_joint_space
+from moveability.errors import InvalidParameterError
 from moveability.hypertree.status import IN
 from moveability.limits import JointLimit
-from moveability.mechanisms import Biglide
+from moveability.mechanisms import Biglide, from_spec
+from region_references import biglide_count, random_biglides
 
 DESIGNS = [
     (5.0, 4.0, (-6.0, 6.0), (-6.0, 6.0)),
@@ -167,3 +172,64 @@ def test_figures_draw_the_sliders(tmp_path):
     motion = plan_motion(result, default_poses(result))
     for name in FIGURES:
         figure(name, result, motion=motion).savefig(tmp_path / f"{name}.png", dpi=50)
+
+
+# ------------------------------------------------ the count in closed form
+def _strokes(lengths, rho1, rho2):
+    return from_spec(
+        {
+            "mechanism": "biglide",
+            "parameters": {"L1": lengths[0], "L2": lengths[1]},
+            "limits": {"rho1": list(rho1), "rho2": list(rho2)},
+        }
+    )
+
+
+def _in_d(m, q) -> bool:
+    """Whether the strokes ``q`` lie in the box and in D, in exact rationals."""
+    (l1, l2), (s1, s2) = m.lengths, m.limits
+    r1, r2 = Fraction(float(q[0])), Fraction(float(q[1]))
+    inside = all(
+        Fraction(lim.lo) <= r <= Fraction(lim.hi) for lim, r in ((s1, r1), (s2, r2))
+    )
+    t = abs(r2 - r1)
+    return inside and abs(Fraction(l1) - Fraction(l2)) < t < Fraction(l1) + Fraction(l2)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_closed_form_count_agrees_with_the_tree_of_the_joint_space(seed):
+    for m in random_biglides(12, 40 + seed):
+        n, witnesses, notes = m.exact_region_count()
+        assert 2 * n == biglide_count(m)
+        tree = count_in_joint_space(m, closed_form=False)
+        if tree.decided:
+            assert tree.at_least == 2 * n
+        assert all(_in_d(m, q) for q in witnesses)
+        assert notes == ()
+
+
+@pytest.mark.parametrize("overlap", [1e-9, 1e-12, 2.0**-40, 0.0, -1e-12])
+@pytest.mark.parametrize("lengths", [(5.0, 5.0), (6.5, 2.0)])
+def test_strokes_that_overlap_the_reach_by_a_hair(overlap, lengths):
+    far = lengths[0] + lengths[1]
+    if overlap < 0:
+        # the legs never meet: refused before any analysis
+        with pytest.raises(InvalidParameterError, match="limits"):
+            _strokes(lengths, (-2.0, 0.0), (far - overlap, far + 3.0))
+        return
+    m = _strokes(lengths, (-2.0, 0.0), (far - overlap, far + 3.0))
+    n, witnesses, notes = m.exact_region_count()
+    # the exact sum of the floats decides: rho2's low end against L1 + L2
+    gap = Fraction(m.limits[1].lo) - Fraction(far)
+    assert n == (1 if gap < 0 else 0)
+    assert all(_in_d(m, q) for q in witnesses)
+    assert (len(notes) == 1) == (gap == 0)
+    if notes:
+        assert "exactly degenerate" in notes[0]
+    result = analyze(m, precision=0.1)
+    assert result.count == (2 * n, 2 * n)
+    assert list(result.notes) == list(notes)
+    if n and not result.regions:
+        # too thin to list: the output says where it is still open
+        assert result.undecided["open"]["parts"] > 0
+        assert "still open" in result.summary()

@@ -33,7 +33,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from moveability import analyze, plan_motion
+from moveability import analyze, load_analysis, plan_motion, save_analysis
 from moveability.analysis.joint_space import count_in_joint_space
 from moveability.errors import InvalidParameterError
 from moveability.intervals import Interval
@@ -441,6 +441,36 @@ def test_proved_counts_equal_the_reference(proved):
 
 def test_proved_designs_locate_and_bracket_volumes(proved):
     _check_answers(*proved)
+
+
+@pytest.mark.parametrize("name", ["symmetric", "asymmetric"])
+def test_every_region_the_count_proves_is_listed(name):
+    """With the resolution on, the regions the joint-space count proves are all
+    listed, each with a certified part (refined at a configuration of each), and
+    every answer about them holds against the reference."""
+    design, limits, expected = PROVED[name]
+    m = from_spec(_spec(design, limits))
+    lo, hi = m.pose_box()
+    result = analyze(m, precision=tuple((hi - lo) / 16))
+    assert result.count == (expected, expected)
+    assert len(result.regions) == expected
+    assert all(r.area[0] > 0 for r in result.regions)
+    assert not result.unlisted_witnesses().any()
+    _check_answers(name, m, Ref(design, limits, n=61), result)
+
+
+def test_regions_listed_at_the_witnesses_are_saved_and_read_back(tmp_path):
+    design, limits, expected = PROVED["asymmetric"]
+    m = from_spec(_spec(design, limits))
+    lo, hi = m.pose_box()
+    result = analyze(m, precision=tuple((hi - lo) / 16))
+    path = tmp_path / "delta.npz"
+    save_analysis(result, path)
+    again = load_analysis(path)
+    assert len(again.regions) == expected
+    assert again.to_dict() == result.to_dict()
+    poses = lo + (hi - lo) * np.random.default_rng(2).random((300, 3))
+    assert again.locate(poses) == result.locate(poses)
 
 
 @pytest.mark.parametrize("name", ["arm-equals-rod", "unlimited", "across-pi", "example-per-axis"])

@@ -46,7 +46,7 @@ with one bound and the flows along the directions of three axes.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -61,7 +61,13 @@ from ..mechanisms.base import Mechanism
 from ..types import Array
 from .flows import attached_nodes, face_neighbours, flow_directions
 
-__all__ = ["JointSpaceCount", "count_in_joint_space", "has_dyads", "joint_condition"]
+__all__ = [
+    "JointSpaceCount",
+    "count_in_joint_space",
+    "has_dyads",
+    "joint_condition",
+    "witness_configurations",
+]
 
 #: depth of the first, uniform pass over each joint axis (two joints, three)
 START_DEPTH = 6
@@ -99,6 +105,14 @@ class JointSpaceCount:
     at_most: int | None
     leaves: int
     open_measure: float
+    #: (m, n_joints): a point of Q inside each component of the certified cells (the
+    #: centre of its largest cell); each is the joints of two configurations, one
+    #: of each sign of det A, of two distinct regions (see :func:`witness_configurations`)
+    witnesses: NDArray[np.float64] = field(
+        default_factory=lambda: np.zeros((0, 0), dtype=np.float64), compare=False
+    )
+    #: lines on what the design is exactly degenerate at, where the count found it
+    notes: tuple[str, ...] = ()
 
     @property
     def decided(self) -> bool:
@@ -198,6 +212,25 @@ class _Distance:
             (v2[0] * v2[0] + v2[1] * v2[1] - dx * a2[0] - dy * a2[1]) * 2.0,
         ]
         return value, grad, second
+
+    def poses(self, joints: Array) -> NDArray[np.float64]:
+        """(m, 2, 2): the platform points of the joints (m, 2), where the circles of
+        the distal links about the knees meet (NaN where they do not)."""
+        (k1, _, _), (k2, _, _) = (
+            leg.knee_boxes(Interval(joints[:, i]))  # type: ignore[attr-defined]
+            for i, leg in enumerate(self.legs)
+        )
+        c1 = np.stack([k1[0].lo, k1[1].lo], axis=1)
+        c2 = np.stack([k2[0].lo, k2[1].lo], axis=1)
+        b1, b2 = (float(leg.distal) for leg in self.legs)  # type: ignore[attr-defined]
+        d = c2 - c1
+        dist2 = np.sum(d * d, axis=1)
+        along = (b1 * b1 - b2 * b2 + dist2) / (2.0 * dist2)
+        with np.errstate(invalid="ignore"):
+            height = np.sqrt(b1 * b1 / dist2 - along * along)
+        foot = c1 + along[:, None] * d
+        normal = np.stack([-d[:, 1], d[:, 0]], axis=1) * height[:, None]
+        return np.stack([foot + normal, foot - normal], axis=1)
 
     def classify(self, lo: Array, hi: Array) -> NDArray[np.uint8]:
         value, _, _ = self.terms(lo, hi, hessian=False)
@@ -308,11 +341,91 @@ def _convex_blocks(
     return out
 
 
+def _largest_cells(
+    lo: Array, hi: Array, volumes: Array, labels: NDArray[np.int64], n: int
+) -> NDArray[np.float64]:
+    """(n, k): the centre of the largest cell of each of the ``n`` components
+    (``labels``, -1 for cells of none)."""
+    inside = np.flatnonzero(labels >= 0)
+    # the largest cell of each label: sort by label, then by decreasing volume
+    order = inside[np.lexsort((-volumes[inside], labels[inside]))]
+    first = order[np.r_[True, labels[order][1:] != labels[order][:-1]]] if order.size else order
+    return np.asarray(0.5 * (lo[first] + hi[first]), dtype=np.float64).reshape(n, lo.shape[1])
+
+
+#: an open part of Q narrower than this share of each joint's range is taken for a
+#: point where the design is degenerate (the refinement reaches 2^-26 of a range)
+_POINT_SHARE = 1e-6
+
+
+def _degenerate_notes(
+    mechanism: Mechanism, lo: Array, hi: Array, spans: Array
+) -> tuple[str, ...]:
+    """A line where the count stays open only about one point of Q (the leaves of
+    ``lo``, ``hi`` within ``_POINT_SHARE`` of each range ``spans``): the design
+    is exactly degenerate there (a joint stop at a parallel singularity, a
+    tangency), or within that distance of it; none otherwise."""
+    if not lo.shape[0]:
+        return ()
+    box_lo, box_hi = lo.min(axis=0), hi.max(axis=0)
+    if not ((box_hi - box_lo) <= _POINT_SHARE * spans).all():
+        return ()
+    centre = 0.5 * (box_lo + box_hi)
+    where = ", ".join(
+        f"{name} = {v:.9g}" for name, v in zip(mechanism.joint_names, centre, strict=True)
+    )
+    width = float((box_hi - box_lo).max())
+    return (
+        f"degenerate design: the count stays open only within {width:.1g} of {where}, "
+        "where the boundary of the non-singular joint set meets a joint stop or itself "
+        "(a stop at a parallel singularity, or a tangency); no precision decides it",
+    )
+
+
+def witness_configurations(
+    mechanism: Mechanism, joints: Array
+) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
+    """The configurations of the joints ``joints`` (m, n_joints) with det A != 0: for
+    the joints of a certified cell of Q (:attr:`JointSpaceCount.witnesses`), one
+    of each sign of det A, each in a region of its own.
+
+    Returns
+    -------
+    poses : (m, 2, k) array
+        The two poses of each joint vector (NaN where none is found).
+    signs : (m, 2) int8
+        The sign of det A at each (0 where it could not be told).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from moveability.mechanisms import FiveBar
+    >>> m = FiveBar(7, 8, 5, 8, 5)
+    >>> poses, signs = witness_configurations(m, np.array([[1.0, 2.0]]))
+    >>> q = np.repeat([[1.0, 2.0]], 2, axis=0)
+    >>> bool(np.abs(m.constraints(poses[0], q)).max() < 1e-9), sorted(signs[0].tolist())
+    (True, [-1, 1])
+    """
+    condition = joint_condition(mechanism)
+    joints = np.asarray(joints, dtype=np.float64).reshape(-1, len(mechanism.limits))
+    poses = (
+        np.full((joints.shape[0], 2, len(mechanism.pose_names)), np.nan)
+        if condition is None
+        else condition.poses(joints)
+    )
+    q = np.repeat(joints, 2, axis=0)
+    with np.errstate(invalid="ignore"):
+        det = mechanism.det_a(poses.reshape(q.shape[0], -1), q).reshape(-1, 2)
+    signs = np.where(np.isfinite(det), np.sign(det), 0).astype(np.int8)
+    return poses, signs
+
+
 def count_in_joint_space(
     mechanism: Mechanism,
     *,
     max_depth: int | None = None,
     max_leaves: int | None = None,
+    closed_form: bool = True,
 ) -> JointSpaceCount | None:
     """Certified bounds on the number of regions of a two-dyad mechanism or a Delta.
 
@@ -321,7 +434,9 @@ def count_in_joint_space(
     joints) and is refined where the count stays open, one level a round, to
     ``max_depth`` per axis (by default ``MAX_DEPTH``, or ``MAX_DEPTH_3D``) or
     ``max_leaves`` leaves (by default ``MAX_LEAVES``, or ``MAX_LEAVES_3D``): a
-    deterministic budget.
+    deterministic budget. Where the mechanism decides D in closed form (the
+    biglide's ``exact_region_count``) that count is given, unless
+    ``closed_form`` is False.
 
     Notes
     -----
@@ -342,6 +457,11 @@ def count_in_joint_space(
     distance = joint_condition(mechanism)
     if distance is None:
         return None
+    exact = getattr(mechanism, "exact_region_count", None)
+    if closed_form and callable(exact):
+        # D decided in closed form (the biglide's bands)
+        n, witnesses, notes = exact()
+        return JointSpaceCount(2 * n, 2 * n, 0, 0.0, witnesses, notes)
     lo, hi, periodic = _joint_box(mechanism)
     k = lo.size
     if max_leaves is None:
@@ -379,6 +499,7 @@ def count_in_joint_space(
         mask[mask] = open_parts[possible[mask]]
         volumes = np.prod(leaves.hi - leaves.lo, axis=1)
         open_measure = float(volumes[mask].sum())
+        still = mask.copy()
         mask &= tree.levels < tree.layout.n_levels
         room = (max_leaves - len(tree)) // ((1 << k) - 1)
         if at_least == at_most or not mask.any() or int(mask.sum()) > room:
@@ -387,5 +508,7 @@ def count_in_joint_space(
                 at_most=None if at_most is None else 2 * at_most,
                 leaves=len(tree),
                 open_measure=open_measure,
+                witnesses=_largest_cells(leaves.lo, leaves.hi, volumes, certain, n_certain),
+                notes=_degenerate_notes(mechanism, leaves.lo[still], leaves.hi[still], hi - lo),
             )
         tree = tree.refine(mask, distance.classify)

@@ -44,9 +44,16 @@ from .flows import (
     slot_spans,
     supports_flows,
 )
-from .joint_space import JointSpaceCount, count_in_joint_space, joint_condition
+from .joint_space import (
+    JointSpaceCount,
+    count_in_joint_space,
+    joint_condition,
+    witness_configurations,
+)
+from .open_parts import open_parts, open_text
 from .regions import RegionGraph, region_graph
 from .sheets import SheetTable, classify_sheets, stack_tables
+from .valid_sets import covered_by_classes, valid_set_classes
 
 __all__ = [
     "MAX_LEAVES",
@@ -1010,6 +1017,8 @@ class Analysis:
         self._flows: tuple[Any, ...] | None = None
         #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1), where a region might hide
         self.open_nodes = np.zeros((2, *self.table.status.shape), dtype=bool)
+        #: see :meth:`unlisted_witnesses`, found when first asked
+        self._unlisted: NDArray[np.bool_] | None = None
         if not self._listed_are_all():
             self._attach(leaves, flows_of, saved)
         elif saved is not None:
@@ -1285,11 +1294,89 @@ class Analysis:
         return mask
 
     def hiding_leaves(self) -> NDArray[np.bool_]:
-        """Leaves holding an open node, where a region might hide; none once the
-        listed regions are proved to be all (:attr:`complete`)."""
+        """Leaves holding an open node, where a region might hide, and those holding
+        a configuration of a region the joint-space count proves whose node is not
+        certified (:meth:`unlisted_witnesses`); none once the listed regions are
+        proved to be all (:attr:`complete`)."""
         if self.complete:
             return np.zeros(len(self.areas), dtype=bool)
-        return np.asarray(self.open_nodes.any(axis=(0, 2)), dtype=bool)
+        joint = self.joint_count
+        if joint is not None and joint.decided:
+            # the count is proved: no open node can change it, the regions it
+            # proves are found at their witnesses
+            return self.unlisted_witnesses()
+        return np.asarray(self.open_nodes.any(axis=(0, 2)) | self.unlisted_witnesses(), dtype=bool)
+
+    def unlisted_witnesses(self) -> NDArray[np.bool_]:
+        """Leaves where a region proved by the joint-space count may still lack a
+        certified part: each certified component of Q holds two regions, with a
+        configuration of each at its witness joints (see
+        :func:`~moveability.analysis.joint_space.witness_configurations`); the leaf
+        of such a pose is returned while the node of its posture there is not
+        certified. Refined there, the region gets a certified part and is listed
+        (or, sharing a possible component with another, the necks split them)."""
+        if self._unlisted is None:
+            self._unlisted = self._find_unlisted()
+        return self._unlisted.copy()
+
+    def _find_unlisted(self) -> NDArray[np.bool_]:
+        out = np.zeros(len(self.areas), dtype=bool)
+        leaf, _, certified = self._witness_nodes()
+        out[leaf[~certified]] = True
+        return out
+
+    def _witness_parts(self) -> list[int] | None:
+        """The certified parts holding the witness configurations of a decided
+        joint-space count (see :meth:`unlisted_witnesses`), one per region it
+        proves, where every one is certified; else None.
+
+        The witnesses lie in distinct regions (distinct components of the
+        certified cells of Q, or two signs of det A), so their parts are in
+        distinct regions, and being as many as the count they are all the
+        regions."""
+        joint = self.joint_count
+        if joint is None or not joint.decided or not joint.witnesses.size:
+            return None
+        leaf, posture, certified = self._witness_nodes()
+        if leaf.size != joint.at_least or not certified.all():
+            return None
+        parts = self.graph.certain[leaf, posture]
+        if np.unique(parts).size != parts.size:
+            return None  # two witnesses in one certified part: not what was proved
+        return [int(c) for c in parts]
+
+    def _witness_nodes(
+        self,
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.bool_]]:
+        """The leaf and posture of each witness configuration placed in the tree,
+        and whether that node is certified."""
+        none = np.zeros(0, dtype=np.intp)
+        joint, m = self.joint_count, self.mechanism
+        if joint is None or not joint.witnesses.size:
+            return none, none, np.zeros(0, dtype=bool)
+        poses, signs = witness_configurations(m, joint.witnesses)
+        q = np.repeat(joint.witnesses, 2, axis=0)
+        points = poses.reshape(q.shape[0], -1)
+        found = np.isfinite(points).all(axis=1) & (signs.ravel() != 0)
+        q, points = q[found], points[found]
+        if not points.size:
+            return none, none, np.zeros(0, dtype=bool)
+        _, leaf = locate(self.tree, points)
+        with np.errstate(invalid="ignore"):
+            angles = m.joint_angles(points, clip=True)
+            gap = angles - q[:, None, :]
+            for i, limit in enumerate(m.limits):
+                if not limit.prismatic:
+                    gap[:, :, i] = np.mod(gap[:, :, i] + np.pi, 2 * np.pi) - np.pi
+            same = (np.abs(gap) <= 1e-7 * (1.0 + np.abs(q[:, None, :]))).all(axis=2)
+        posture = np.argmax(same, axis=1)
+        take = (leaf >= 0) & same.any(axis=1)
+        leaf, posture = leaf[take], posture[take]
+        g, t = self.graph, self.table
+        certified = (g.certain[leaf, posture] >= 0) & (
+            (t.status[leaf, posture] == IN) | t.group[leaf, posture]
+        )
+        return leaf, posture, np.asarray(certified, dtype=bool)
 
     def _resolve(self) -> None:
         g, t = self.graph, self.table
@@ -1324,6 +1411,19 @@ class Analysis:
                 self._extra_certain.extend(int(x) for x in inside if x != c)
                 first = int(np.flatnonzero(g.certain.ravel() == c)[0])
                 regions.append((first, c, row * (1 << 40) + u))
+        proved = self._witness_parts()
+        #: whether the regions are listed at the joint-space count's witnesses
+        self._by_witness = False
+        if proved is not None and len(proved) > len(regions):
+            self._by_witness = True
+            # the joint-space count's regions, one at the certified part of each
+            # witness: distinct regions, all of them
+            regions = []
+            for c in proved:
+                row = int(g.certain_sign[c] < 0)
+                first = int(np.flatnonzero(g.certain.ravel() == c)[0])
+                regions.append((first, c, row * (1 << 40) + int(self._certain_to_possible[c])))
+            self._extra_certain = sorted(set(range(g.certain_sign.size)) - set(proved))
         regions.sort()
         certified_leaf_in = t.status == IN
         w_certain = (t.exists & t.within).any(axis=1)  # whole leaf in W
@@ -1334,6 +1434,10 @@ class Analysis:
         #: leaves that keep some W_Nj = W open
         self._w_open = np.zeros(len(self.areas), dtype=bool)
         self._spanning = self._spanning_nodes()
+        # the listed regions are all: a possible component that holds one of them
+        # holds no other region
+        listed_all = self._bounds(len(regions))[1] == len(regions)
+        codes = [code for _, _, code in regions]
         for rid, (_, c, code) in enumerate(regions):
             row, u = divmod(code, 1 << 40)
             in_c = g.certain == c
@@ -1346,7 +1450,8 @@ class Analysis:
             else:
                 uncovered = w_possible & ~covered
                 if uncovered.any():
-                    uncovered &= ~self._held_by(c, row, uncovered)
+                    sole = u if listed_all and codes.count(code) == 1 else None
+                    uncovered &= ~self._held_by(c, row, uncovered, sole)
                 equals = None if uncovered.any() else True
                 self._w_open |= uncovered
             used = np.flatnonzero(in_c.any(axis=0))
@@ -1380,7 +1485,9 @@ class Analysis:
             valid &= (limit.classify(angles) == INSIDE).reshape(valid.shape)
         return valid
 
-    def _held_by(self, c: int, row: int, leaves: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    def _held_by(
+        self, c: int, row: int, leaves: NDArray[np.bool_], sole: int | None = None
+    ) -> NDArray[np.bool_]:
         """Of ``leaves``, those where every pose of W (but a set of measure zero)
         has a configuration in the region of certified part ``c`` (sign row ``row``).
 
@@ -1396,6 +1503,18 @@ class Analysis:
         of the region's sign is certified in ``c``, attached to c alone or holds
         no valid configuration: the poses left out are those whose every valid
         configuration is singular, on the singular curves.
+
+        A node is *good* for the region when every valid configuration it holds
+        lies in the region, with det A of the region's sign throughout: certified
+        in ``c`` or attached to c alone; or, where ``sole`` is the region's
+        possible component and it holds no other region (the listed regions are
+        proved to be all), every sub-node that may hold a valid configuration
+        lies in that component. A leaf also qualifies when each class of
+        postures with one valid set over it (see
+        :mod:`moveability.analysis.valid_sets`) holds a good node or holds no
+        valid configuration: every pose of W over it has a valid configuration
+        of some posture, and the good node of that posture's class one at the
+        same pose, in the region. This holds where joint limits cut W.
         """
         g, t = self.graph, self.table
         s = (1, -1)[row]
@@ -1405,8 +1524,21 @@ class Analysis:
         done = in_c | ~t.may_hold(s)
         (attached,) = self._attached([done], (row,))
         ok = (done | attached) & ~t.may_hold(-s) & ~(t.singular & (t.status != OUT))
-        spans = (in_c | attached) & self._spanning & (t.sign == s)
-        return np.asarray(leaves & (ok.all(axis=1) | spans.any(axis=1)), dtype=bool)
+        good = (in_c | attached) & (t.sign == s)
+        if sole is not None:
+            n, n_post = t.status.shape
+            labels = g.possible[row].reshape(n, n_post, g.slots)
+            own = ((labels == sole) | (labels < 0)).all(axis=2)
+            good |= own & (t.sign == s) & (t.status != OUT) & ~t.singular
+        spans = good & self._spanning
+        held = ok.all(axis=1) | spans.any(axis=1)
+        rest = leaves & ~held
+        if rest.any():
+            # postures of one valid set over the leaf: one good node covers them all
+            sub = t.take(np.flatnonzero(rest))
+            classes = valid_set_classes(self.mechanism, sub)
+            held[rest] = covered_by_classes(classes, sub.status, good[rest])
+        return np.asarray(leaves & held, dtype=bool)
 
     @property
     def count(self) -> tuple[int, int | None]:
@@ -1428,8 +1560,12 @@ class Analysis:
         >>> analyze(FiveBar(7, 8, 5, 8, 5), precision=0.1).count
         (2, 2)
         """
+        return self._bounds(len(self.regions))
+
+    def _bounds(self, n_listed: int) -> tuple[int, int | None]:
+        """:attr:`count`, with ``n_listed`` regions listed."""
         hiding = any(flag.any() for flag in self._open_possible)
-        at_least, at_most = len(self.regions), None if hiding else self.graph.certain_sign.size
+        at_least, at_most = n_listed, None if hiding else self.graph.certain_sign.size
         joint = self.joint_count
         if joint is not None:
             at_least = max(at_least, joint.at_least)
@@ -1524,7 +1660,7 @@ class Analysis:
         }
 
     @property
-    def undecided(self) -> dict[str, float | int]:
+    def undecided(self) -> dict[str, Any]:
         """What the precision left open.
 
         ``components``: possible components with no certified part where a
@@ -1536,6 +1672,12 @@ class Analysis:
         node not proved to join a certified part). Once the listed regions are
         proved to be all (:attr:`complete`), no component, detached part or open
         node is left. With three pose axes the keys say ``volume`` for ``area``.
+
+        ``open``: where the count or N-connectivity is still open (the leaves the
+        resolution would refine next, :meth:`open_leaves`), as parts of touching
+        leaves: their number, total measure and the largest ones with their
+        bounding boxes (see :func:`~moveability.analysis.open_parts.open_parts`);
+        no part once both are decided.
         """
         g = self.graph
         complete = self.complete
@@ -1546,12 +1688,22 @@ class Analysis:
         undecided_leaves = self.tree.status == BOUNDARY
         measure = self.measure_name
         open_leaves = self.hiding_leaves()
+        if complete and self.n_connected is not None:
+            still = np.zeros(self.areas.size, dtype=bool)
+        else:
+            still = self.open_leaves()
+        # the boxes of the open leaves alone (the others are not read)
+        boxes, rows = _Boxes(self.tree), np.flatnonzero(still)
+        lo, hi = np.zeros((2, still.size, self.tree.ndim))
+        lo[rows], hi[rows] = boxes.lo[rows], boxes.hi[rows]
+        where = open_parts(lo, hi, self.areas, self._pairs, still, measure)
         return {
             "components": len(unresolved),
             measure: float(self.areas[touch].sum()),
-            "detached": 0 if complete else len(self._extra_certain),
+            "detached": 0 if complete and not self._by_witness else len(self._extra_certain),
             f"boundary_{measure}": float(self.areas[undecided_leaves].sum()),
             f"open_{measure}": float(self.areas[open_leaves].sum()),
+            "open": where,
         }
 
     @property
@@ -1744,7 +1896,15 @@ class Analysis:
             "undecided": self.undecided,
             "mechanism": self.mechanism.name,
             "leaves": len(self.tree),
+            "notes": list(self.notes),
         }
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """Lines on what the design is exactly degenerate at, where that was found
+        (a stroke that touches a parallel singularity only at its end, say): the
+        reason an answer is what it is, rather than a bare null."""
+        return () if self.joint_count is None else tuple(self.joint_count.notes)
 
     def summary(self) -> str:
         """A readable summary."""
@@ -1769,4 +1929,8 @@ class Analysis:
             f"{u[f'boundary_{measure}']:.4f} of {measure} in undecided leaves"
         )
         lines.append(f"workspace N-connected: {word(self.n_connected)}")
+        still = open_text(u["open"], self.mechanism.pose_names, measure)
+        if still:
+            lines.append(still)
+        lines.extend(self.notes)
         return "\n".join(lines)

@@ -84,6 +84,8 @@ def save_analysis(result: Analysis, path: str | os.PathLike[str]) -> None:
             [count.at_least, -1 if count.at_most is None else count.at_most, count.leaves]
         )
         arrays["joint_open_measure"] = np.array(count.open_measure)
+        arrays["joint_witnesses"] = np.asarray(count.witnesses, dtype=np.float64)
+        arrays["joint_notes"] = np.array(count.notes, dtype=np.str_)
     arrays["digest"] = np.array(_digest(arrays))
     arrays["format"] = np.array(FORMAT)
     arrays["version"] = np.array(FORMAT_VERSION)
@@ -158,8 +160,16 @@ def _rebuild(arrays: dict[str, NDArray[Any]]) -> Analysis:
     joint = None
     if "joint_count" in arrays:
         at_least, at_most, leaves = (int(v) for v in arrays["joint_count"])
+        witnesses = np.asarray(arrays.get("joint_witnesses", np.zeros((0, 0))), dtype=np.float64)
+        if witnesses.ndim != 2 or (witnesses.size and witnesses.shape[1] != len(mechanism.limits)):
+            raise ValueError("bad witnesses of the joint-space count")
         joint = JointSpaceCount(
-            at_least, None if at_most < 0 else at_most, leaves, float(arrays["joint_open_measure"])
+            at_least,
+            None if at_most < 0 else at_most,
+            leaves,
+            float(arrays["joint_open_measure"]),
+            witnesses,
+            tuple(str(v) for v in np.atleast_1d(arrays.get("joint_notes", np.zeros(0, np.str_)))),
         )
     eps = arrays["precision"]
     precision = float(eps[0]) if (eps == eps[0]).all() else tuple(float(v) for v in eps)

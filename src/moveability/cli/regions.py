@@ -77,6 +77,12 @@ def format_regions(data: Mapping[str, Any]) -> str:
                 else ""
             )
         )
+        from ..analysis.open_parts import open_text
+
+        still = open_text(undecided.get("open") or {}, data.get("pose") or (), measure)
+        if still:
+            lines.append(still)
+    lines.extend(str(note) for note in data.get("notes") or ())
     return "\n".join(lines)
 
 

@@ -14,6 +14,7 @@ where a leg stands perpendicular to the line, ``|y| = L_i``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 from numpy.typing import NDArray
@@ -286,6 +287,58 @@ class Biglide(Mechanism):
         # x - rho_i = offsets[i], so rho2 - rho1 = offsets[0] - offsets[1]
         y = Interval(lo[:, 1], hi[:, 1])
         return y * (offsets[0] - offsets[1])
+
+    def exact_region_count(self) -> tuple[int, NDArray[np.float64], tuple[str, ...]]:
+        """The number of components of D, decided exactly, with a joint vector inside
+        each and notes on exact degeneracies.
+
+        With ``t = rho2 - rho1`` the sliders' distance is ``|t|``, so (see
+        :mod:`moveability.analysis.joint_space`) D is the union of the open bands
+        ``|L1 - L2| < t < L1 + L2`` and ``-(L1 + L2) < t < -|L1 - L2|`` of the
+        plane of strokes: each band meets the (convex) box of strokes in a convex
+        set, one component or none. A band meets the box exactly when its open
+        range of ``t`` meets ``[lo2 - hi1, hi2 - lo1]``; the comparisons are made
+        on the floats' exact rational values, so a stroke that overlaps the
+        legs' reach by a hair counts, and one that only touches it does not.
+
+        Returns
+        -------
+        n : int
+            Components of D (the regions are twice as many, one per sign of det A).
+        witnesses : (n, 2) array
+            A pair of strokes inside each component.
+        notes : tuple of str
+            One line per band whose closure only touches the box: there the design
+            is exactly degenerate (the legs meet only at a parallel singularity).
+
+        Examples
+        --------
+        >>> from moveability.limits import JointLimit
+        >>> m = Biglide(5.0, 5.0, (JointLimit(-1.0, 0.0, prismatic=True),
+        ...                        JointLimit(10.0 - 1e-9, 12.0, prismatic=True)))
+        >>> n, witnesses, notes = m.exact_region_count()
+        >>> n, bool(9.9999999 < witnesses[0, 1] - witnesses[0, 0] < 10.0), notes
+        (1, True, ())
+        """
+        (l1, l2), (s1, s2) = self.lengths, self.limits
+        a1, b1, a2, b2 = (Fraction(float(v)) for v in (s1.lo, s1.hi, s2.lo, s2.hi))
+        t_lo, t_hi = a2 - b1, b2 - a1
+        near, far = abs(Fraction(l1) - Fraction(l2)), Fraction(l1) + Fraction(l2)
+        witnesses: list[list[float]] = []
+        notes: list[str] = []
+        for lo, hi in ((near, far), (-far, -near)):
+            if lo < t_hi and t_lo < hi:
+                t = (max(lo, t_lo) + min(hi, t_hi)) / 2
+                r1 = (max(a1, a2 - t) + min(b1, b2 - t)) / 2
+                witnesses.append([float(r1), float(r1 + t)])
+            elif lo == t_hi or t_lo == hi:
+                side = "rho2 - rho1" if lo >= 0 else "rho1 - rho2"
+                notes.append(
+                    f"exactly degenerate: the strokes reach {side} = "
+                    f"{float(abs(lo if lo == t_hi else hi)):g} (the legs' parallel "
+                    "singularity) only at their ends, so no region lies there"
+                )
+        return len(witnesses), np.array(witnesses, dtype=np.float64).reshape(-1, 2), tuple(notes)
 
     def identically_singular(self, posture: int) -> bool:
         """With legs of equal lengths, ``++`` and ``--`` put both sliders at one place:

@@ -830,6 +830,32 @@ class Circumradius:
         )
         return _no_nan(value), [_no_nan(g) for g in grad], []
 
+    def poses(self, joints: Array) -> NDArray[np.float64]:
+        """(m, 2, 3): the platform's centres of the joints (m, 3), on the spheres of
+        radius ``lb`` about the centres ``c_i``, on either side of their plane
+        (NaN where the spheres do not meet)."""
+        c = np.stack(
+            [
+                np.stack([v.lo for v in leg.centre_boxes(Interval(joints[:, i]))], axis=1)
+                for i, leg in enumerate(self.legs)
+            ],
+            axis=1,
+        )
+        a, b = c[:, 0] - c[:, 2], c[:, 1] - c[:, 2]
+        n = np.cross(a, b)
+        n2 = np.sum(n * n, axis=1)
+        # the circumcentre of the three centres, from c_3
+        aa, bb = np.sum(a * a, axis=1), np.sum(b * b, axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            centre = (
+                np.cross(aa[:, None] * b - bb[:, None] * a, n) / (2.0 * n2[:, None])
+            )
+            rho2 = np.sum(centre * centre, axis=1)
+            height = np.sqrt(float(self.rod) ** 2 - rho2) / np.sqrt(n2)
+        foot = c[:, 2] + centre
+        up = n * height[:, None]
+        return np.stack([foot + up, foot - up], axis=1)
+
     def classify(self, lo: Array, hi: Array) -> NDArray[np.uint8]:
         """IN where ``F > 0`` over the whole box, OUT where ``F <= 0``, else BOUNDARY."""
         from ..hypertree.status import BOUNDARY, IN, OUT
