@@ -32,8 +32,9 @@ quadtree of Q:
   then convex, and a ray from it through any point of D stays in D up to the
   cell's boundary.
 
-Only the cells of possible components whose count is still open are refined,
-one level a round, until the bounds meet or a budget is spent.
+Only the cells that keep the count open are refined, one level a round: the
+loose cells, and the undecided cells of possible components that hold several
+certified ones; until the bounds meet or a budget is spent.
 
 The Delta robot has the same structure in a 3-D joint space: given q, the
 platform's centre lies on three spheres of radius ``lb`` about centres
@@ -499,6 +500,12 @@ def count_in_joint_space(
         mask[mask] = open_parts[possible[mask]]
         volumes = np.prod(leaves.hi - leaves.lo, axis=1)
         open_measure = float(volumes[mask].sum())
+        # refined: the loose cells, and every undecided cell of a component that
+        # holds several certified ones (they join there, or it splits); the other
+        # undecided cells are attached already
+        several = np.zeros(mask.size, dtype=bool)
+        several[mask] = (per >= 2)[possible[mask]]
+        mask &= several | loose
         still = mask.copy()
         mask &= tree.levels < tree.layout.n_levels
         room = (max_leaves - len(tree)) // ((1 << k) - 1)
