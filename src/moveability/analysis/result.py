@@ -1021,8 +1021,11 @@ class Analysis:
         self._flows: tuple[Any, ...] | None = None
         #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1), where a region might hide
         self.open_nodes = np.zeros((2, *self.table.status.shape), dtype=bool)
-        #: see :meth:`unlisted_witnesses`, found when first asked
+        #: see :meth:`unlisted_witnesses` and :meth:`_witness_nodes`, found when first asked
         self._unlisted: NDArray[np.bool_] | None = None
+        self._witnessed: tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.bool_]] | None = (
+            None
+        )
         if not self._listed_are_all():
             self._attach(leaves, flows_of, saved)
         elif saved is not None:
@@ -1267,6 +1270,11 @@ class Analysis:
         if self.complete:
             # every region is listed: no neck or hiding place can change the count
             return mask
+        joint = self.joint_count
+        if joint is not None and joint.decided and self._witness_nodes()[0].size == joint.at_least:
+            # the regions are listed at the witnesses once each is certified (see
+            # _witness_parts): no neck needs splitting for that
+            return mask
         g, t = self.graph, self.table
         n, n_post = t.status.shape
         certified = (t.status == IN) | t.group
@@ -1318,7 +1326,7 @@ class Analysis:
         :func:`~moveability.analysis.joint_space.witness_configurations`); the leaf
         of such a pose is returned while the node of its posture there is not
         certified. Refined there, the region gets a certified part and is listed
-        (or, sharing a possible component with another, the necks split them)."""
+        (listed there once every witness is, see :meth:`_witness_parts`)."""
         if self._unlisted is None:
             self._unlisted = self._find_unlisted()
         return self._unlisted.copy()
@@ -1353,7 +1361,14 @@ class Analysis:
         self,
     ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.bool_]]:
         """The leaf and posture of each witness configuration placed in the tree,
-        and whether that node is certified."""
+        and whether that node is certified (found when first asked)."""
+        if self._witnessed is None:
+            self._witnessed = self._place_witnesses()
+        return self._witnessed
+
+    def _place_witnesses(
+        self,
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.bool_]]:
         none = np.zeros(0, dtype=np.intp)
         joint, m = self.joint_count, self.mechanism
         if joint is None or not joint.witnesses.size:
