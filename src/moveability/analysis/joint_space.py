@@ -226,11 +226,12 @@ class _Distance:
         b1, b2 = (float(leg.distal) for leg in self.legs)  # type: ignore[attr-defined]
         d = c2 - c1
         dist2 = np.sum(d * d, axis=1)
-        along = (b1 * b1 - b2 * b2 + dist2) / (2.0 * dist2)
-        with np.errstate(invalid="ignore"):
+        # knees at one place (a joint vector off D): NaN, no pose
+        with np.errstate(invalid="ignore", divide="ignore"):
+            along = (b1 * b1 - b2 * b2 + dist2) / (2.0 * dist2)
             height = np.sqrt(b1 * b1 / dist2 - along * along)
-        foot = c1 + along[:, None] * d
-        normal = np.stack([-d[:, 1], d[:, 0]], axis=1) * height[:, None]
+            foot = c1 + along[:, None] * d
+            normal = np.stack([-d[:, 1], d[:, 0]], axis=1) * height[:, None]
         return np.stack([foot + normal, foot - normal], axis=1)
 
     def classify(self, lo: Array, hi: Array) -> NDArray[np.uint8]:
