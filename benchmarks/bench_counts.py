@@ -299,14 +299,20 @@ def _biglide(lengths: Sequence[float], strokes: Sequence[Sequence[float]]) -> di
     }
 
 
+def _biglide_legs(rng: np.random.Generator, equal: bool) -> list[float]:
+    """Two leg lengths in 2..7 (one decimal), the second equal to the first if asked."""
+    lengths = [float(v) for v in np.round(rng.uniform(2.0, 7.0, 2), 1)]
+    if equal:
+        lengths[1] = lengths[0]
+    return lengths
+
+
 def random_biglides(n: int, seed: int = 5) -> list[Mechanism]:
     """Legs 2..7 (a third equal), strokes 0.5..10 long starting in -8..6."""
     rng = np.random.default_rng(seed)
     out: list[Mechanism] = []
     while len(out) < n:
-        lengths = [float(v) for v in np.round(rng.uniform(2.0, 7.0, 2), 1)]
-        if len(out) % 3 == 0:
-            lengths[1] = lengths[0]
+        lengths = _biglide_legs(rng, equal=len(out) % 3 == 0)
         strokes = []
         for _ in range(2):
             lo = float(np.round(rng.uniform(-8.0, 6.0), 1))
@@ -328,9 +334,7 @@ def random_near_biglides(n: int, seed: int = 7) -> list[Mechanism]:
     rng = np.random.default_rng(seed)
     out: list[Mechanism] = []
     while len(out) < n:
-        lengths = [float(v) for v in np.round(rng.uniform(2.0, 7.0, 2), 1)]
-        if len(out) % 3 == 0:
-            lengths[1] = lengths[0]
+        lengths = _biglide_legs(rng, equal=len(out) % 3 == 0)
         hair = _HAIRS[len(out) % len(_HAIRS)]
         lo1 = float(np.round(rng.uniform(-8.0, 0.0), 1))
         hi1 = lo1 + float(np.round(rng.uniform(0.5, 8.0), 1))
