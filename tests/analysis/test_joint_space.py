@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from mpmath import mp, mpf
 
 from moveability import analyze, load_analysis, save_analysis
 from moveability.analysis.flows import into_corner
@@ -21,7 +22,6 @@ from moveability.analysis.joint_space import (
     witness_configurations,
 )
 from moveability.hypertree.status import IN
-from moveability.intervals import Interval
 from moveability.limits import JointLimit
 from moveability.mechanisms import Delta, FiveBar, from_spec
 from region_references import (
@@ -245,30 +245,42 @@ def test_witnesses_stand_for_every_component_of_a_decided_count():
     assert ((w > lo) & (w < hi)).all()  # strictly within the limits
 
 
-def test_a_corner_of_the_limits_on_a_parallel_singularity_is_named():
-    """theta1's stop and theta2's stop meet exactly on the singular curve: the
-    count stays open about that corner alone, and the output says so."""
-    m = from_spec(
-        {
-            "mechanism": "five-bar",
-            "parameters": {"L0": 5.9, "L1": 3.3, "L2": 5.3, "L3": 6.3, "L4": 5.3},
-            "limits": {
-                "theta1": [-3.652828432061323, -2.82],
-                "theta2": [-1.5429887555960375, 1.925532188225774],
-            },
-        }
+def test_a_corner_of_the_limits_a_hair_off_a_parallel_singularity_is_decided():
+    """theta1's stop and theta2's stop meet 1.6e-14 (in d^2) outside D: the stop
+    traces decide the count there, as the design whose corner is moved 1e-3
+    further out of D (nothing near-degenerate left) has it."""
+    theta1, theta2 = (-3.652828432061323, -2.82), (-1.5429887555960375, 1.925532188225774)
+    lengths = (5.9, 3.3, 5.3, 6.3, 5.3)
+    m = five_bar(lengths, theta1, theta2)
+    found = count_in_joint_space(m)
+    assert found.decided and not found.notes
+    assert count_in_joint_space(m, stop_traces=False).at_most is None
+
+    def margin(stop):  # d^2 - (L2 + L4)^2 at the corner, 50 digits
+        with mp.workdps(50):
+            l0, l1, _, l3, _ = (mpf(v) for v in lengths)
+            a, b = mpf(stop), mpf(theta2[0])
+            dx = l1 * mp.cos(a) - l0 - l3 * mp.cos(b)
+            d2 = dx**2 + (l1 * mp.sin(a) - l3 * mp.sin(b)) ** 2
+            return float(d2 - (mpf(5.3) + mpf(5.3)) ** 2)
+
+    assert 0 < margin(theta1[1]) < 1e-13
+    step = 1e-3 if margin(theta1[1] + 1e-3) > margin(theta1[1]) else -1e-3
+    far = count_in_joint_space(
+        five_bar(lengths, (theta1[0], theta1[1] + step), theta2), stop_traces=False
     )
+    assert far.decided and (far.at_least, far.at_most) == (found.at_least, found.at_most)
+
+
+def test_a_stop_exactly_at_a_parallel_singularity_is_named():
+    """theta1 = 0 = theta2, a corner of the limits, puts the knees exactly the
+    distal links' sum apart (every float exact): the count stays open about
+    that corner alone, and the output says so."""
+    m = five_bar((2.0, 1.0, 1.0, 1.0, 1.0), (0.0, 1.5), (0.0, 1.5))
     found = count_in_joint_space(m)
     assert not found.decided
     (note,) = found.notes
-    assert note.startswith("degenerate design") and "theta1 = -2.82" in note
-    # the corner is on the singular curve: |C1 C2| = L2 + L4 there
-    (k1, _, _), (k2, _, _) = (
-        leg.knee_boxes(Interval(np.array([v])))
-        for leg, v in zip(m.legs, (-2.82, -1.5429887555960375), strict=True)
-    )
-    d = np.hypot(k1[0].lo - k2[0].lo, k1[1].lo - k2[1].lo)[0]
-    assert d == pytest.approx(5.3 + 5.3, abs=1e-9)
+    assert note.startswith("degenerate design") and "theta1 = 2.2" in note
     result = analyze(m, precision=0.1)
     assert result.notes == found.notes and result.to_dict()["notes"] == [note]
     assert note in result.summary()

@@ -55,12 +55,13 @@ from numpy.typing import NDArray
 
 from .. import intervals as iv
 from ..hypertree.status import BOUNDARY, IN, OUT
-from ..hypertree.topology import components
+from ..hypertree.topology import adjacency, components
 from ..hypertree.tree import HyperTree
 from ..intervals import Interval
 from ..mechanisms.base import Mechanism
 from ..types import Array
 from .flows import attached_nodes, face_neighbours, flow_directions
+from .stop_traces import StopBlock, block_labels, block_members, find_blocks
 
 __all__ = [
     "JointSpaceCount",
@@ -241,11 +242,14 @@ class _Distance:
         return np.where(inside, IN, np.where(outside, OUT, BOUNDARY)).astype(np.uint8)
 
 
-def _attached(tree: HyperTree, leaves: Any, distance: Any) -> NDArray[np.bool_]:
+def _attached(
+    tree: HyperTree, leaves: Any, distance: Any, settled: NDArray[np.bool_]
+) -> NDArray[np.bool_]:
     """The undecided leaves whose every point of D reaches an IN leaf within D
-    (``leaves`` are the tree's leaves)."""
+    (``leaves`` are the tree's leaves), ``settled`` leaves taken as decided (those
+    of stop blocks: their points of D lie in certified pieces)."""
     status = tree.status
-    rows = np.flatnonzero(status == BOUNDARY)
+    rows = np.flatnonzero((status == BOUNDARY) & ~settled)
     lo, hi = leaves.lo[rows], leaves.hi[rows]
     k = tree.ndim
     with np.errstate(invalid="ignore", over="ignore"):
@@ -275,7 +279,7 @@ def _attached(tree: HyperTree, leaves: Any, distance: Any) -> NDArray[np.bool_]:
     bits = (ok.astype(np.uint64) * weights).sum(axis=1, dtype=np.uint64)[:, None]
     nodes = np.stack([rows, np.zeros_like(rows)], axis=1)
     neighbours = face_neighbours(tree)
-    done = status != BOUNDARY
+    done = (status != BOUNDARY) | settled
     attached = np.zeros(len(tree), dtype=bool)
     while True:
         found = attached_nodes(
@@ -343,16 +347,36 @@ def _convex_blocks(
     return out
 
 
-def _largest_cells(
-    lo: Array, hi: Array, volumes: Array, labels: NDArray[np.int64], n: int
+def _witnesses(
+    leaves: Any,
+    volumes: Array,
+    labels: NDArray[np.int64],
+    n: int,
+    blocks: list[StopBlock],
+    distance: Any,
 ) -> NDArray[np.float64]:
-    """(n, k): the centre of the largest cell of each of the ``n`` components
-    (``labels``, -1 for cells of none)."""
-    inside = np.flatnonzero(labels >= 0)
+    """(n, k): a joint vector of D in each of the ``n`` certain components
+    (``labels`` over the leaves, then the pieces of the stop ``blocks``, -1 for
+    nodes of none): the centre of its largest IN cell, or where it has none, a
+    point of D of its first piece (:meth:`StopBlock.points`)."""
+    n_leaves = volumes.size
+    out = np.full((n, leaves.lo.shape[1]), np.nan)
+    cells = labels[:n_leaves]
+    inside = np.flatnonzero(cells >= 0)
     # the largest cell of each label: sort by label, then by decreasing volume
-    order = inside[np.lexsort((-volumes[inside], labels[inside]))]
-    first = order[np.r_[True, labels[order][1:] != labels[order][:-1]]] if order.size else order
-    return np.asarray(0.5 * (lo[first] + hi[first]), dtype=np.float64).reshape(n, lo.shape[1])
+    order = inside[np.lexsort((-volumes[inside], cells[inside]))]
+    first = order[np.r_[True, cells[order][1:] != cells[order][:-1]]] if order.size else order
+    out[cells[first]] = 0.5 * (leaves.lo[first] + leaves.hi[first])
+    pieces = labels[n_leaves:]
+    bare = np.ones(n, dtype=bool)
+    bare[cells[inside]] = False
+    if not bare.any():
+        return out
+    points = np.concatenate([block.points(distance.classify) for block in blocks])
+    for p in np.flatnonzero(pieces >= 0)[::-1]:
+        if bare[pieces[p]]:
+            out[pieces[p]] = points[p]
+    return out
 
 
 #: an open part of Q narrower than this share of each joint's range is taken for a
@@ -428,6 +452,7 @@ def count_in_joint_space(
     max_depth: int | None = None,
     max_leaves: int | None = None,
     closed_form: bool = True,
+    stop_traces: bool = True,
 ) -> JointSpaceCount | None:
     """Certified bounds on the number of regions of a two-dyad mechanism or a Delta.
 
@@ -438,7 +463,9 @@ def count_in_joint_space(
     ``max_leaves`` leaves (by default ``MAX_LEAVES``, or ``MAX_LEAVES_3D``): a
     deterministic budget. Where the mechanism decides D in closed form (the
     biglide's ``exact_region_count``) that count is given, unless
-    ``closed_form`` is False.
+    ``closed_form`` is False. With two joints, boxes on a stop where D's
+    boundary nears it tangentially are decided by D's trace on the stop
+    (:mod:`moveability.analysis.stop_traces`), unless ``stop_traces`` is False.
 
     Notes
     -----
@@ -480,33 +507,51 @@ def count_in_joint_space(
         stop_level=START_DEPTH if k == 2 else START_DEPTH_3D,
         max_leaves=max_leaves,
     )
+    # boxes on a stop decided by D's trace there (two joints), and those that failed
+    blocks: list[StopBlock] = []
+    failed: set[tuple[int, int, int]] = set()
     while True:
-        # closed cells touching at a corner: the IN ones share a point of D (open)
-        possible, n_possible = components(tree, status=IN | BOUNDARY, connectivity=k)
-        certain, n_certain = components(tree, status=IN, connectivity=k)
-        undecided = tree.status == BOUNDARY
         leaves = tree.leaves()
-        loose = undecided & ~_attached(tree, leaves, distance)
+        member = block_members(tree, blocks)
+        settled = member >= 0
+        undecided = (tree.status == BOUNDARY) & ~settled
+        loose = undecided & ~_attached(tree, leaves, distance, settled)
+        # closed cells touching at a corner: the IN ones share a point of D (open)
+        if blocks:
+            pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=k)
+            possible, n_possible, certain, n_certain = block_labels(
+                tree, leaves, blocks, member, pairs
+            )
+        else:
+            possible, n_possible = components(tree, status=IN | BOUNDARY, connectivity=k)
+            certain, n_certain = components(tree, status=IN, connectivity=k)
         # certain components per possible component, and possible ones left loose
         inside = np.flatnonzero(certain >= 0)
         owner = np.full(n_certain, -1, dtype=np.int64)
         owner[certain[inside]] = possible[inside]
         per = np.bincount(owner, minlength=n_possible)
         has_loose = np.zeros(n_possible, dtype=bool)
-        has_loose[possible[loose]] = True
+        of_leaf = possible[: len(tree)]
+        has_loose[of_leaf[loose]] = True
         at_least = int((per > 0).sum())
         at_most = None if loose.any() else n_certain
         open_parts = has_loose | (per >= 2)
-        mask = undecided & (possible >= 0)
-        mask[mask] = open_parts[possible[mask]]
+        mask = undecided & (of_leaf >= 0)
+        mask[mask] = open_parts[of_leaf[mask]]
         volumes = np.prod(leaves.hi - leaves.lo, axis=1)
         open_measure = float(volumes[mask].sum())
         # refined: the loose cells, and every undecided cell of a component that
         # holds several certified ones (they join there, or it splits); the other
         # undecided cells are attached already
         several = np.zeros(mask.size, dtype=bool)
-        several[mask] = (per >= 2)[possible[mask]]
+        several[mask] = (per >= 2)[of_leaf[mask]]
         mask &= several | loose
+        if at_least != at_most and k == 2 and stop_traces:
+            # where D meets a stop, its trace there may decide what no cell does
+            new = find_blocks(tree, distance, np.flatnonzero(mask), blocks, failed)
+            if new:
+                blocks.extend(new)
+                continue
         still = mask.copy()
         mask &= tree.levels < tree.layout.n_levels
         room = (max_leaves - len(tree)) // ((1 << k) - 1)
@@ -516,7 +561,7 @@ def count_in_joint_space(
                 at_most=None if at_most is None else 2 * at_most,
                 leaves=len(tree),
                 open_measure=open_measure,
-                witnesses=_largest_cells(leaves.lo, leaves.hi, volumes, certain, n_certain),
+                witnesses=_witnesses(leaves, volumes, certain, n_certain, blocks, distance),
                 notes=_degenerate_notes(mechanism, leaves.lo[still], leaves.hi[still], hi - lo),
             )
         tree = tree.refine(mask, distance.classify)

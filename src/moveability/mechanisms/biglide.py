@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -67,6 +68,12 @@ class SliderLeg:
         zero = iv.as_interval(np.zeros(np.shape(angles.lo)))
         one = iv.as_interval(np.ones(np.shape(angles.lo)))
         return [angles, zero], [one, zero], [zero, zero]
+
+    def knee_exact(self, angle: Any, ctx: Any) -> tuple[tuple[Any, Any], tuple[Any, Any]]:
+        """The slider ``(rho, 0)`` and its derivative at an interval ``angle`` of
+        the interval context ``ctx`` (mpmath's ``iv``; see
+        :mod:`moveability.analysis.stop_traces`)."""
+        return (angle, ctx.mpf(0)), (ctx.mpf(1), ctx.mpf(0))
 
     def angles(self, points: Array, clip: bool = False) -> Array:
         """Slider positions of both branches, shape (m, 2); NaN where unreachable.

@@ -195,6 +195,22 @@ class RRLeg:
         )
         return [x, y], [-s, c], [-c, -s]
 
+    def knee_exact(self, angle: Any, ctx: Any) -> tuple[tuple[Any, Any], tuple[Any, Any]]:
+        """The elbow ``C(t)`` and ``C'(t)`` at an interval ``angle`` of the interval
+        context ``ctx`` (mpmath's ``iv``, at its working precision): the stop
+        traces of :mod:`moveability.analysis.stop_traces`.
+
+        Examples
+        --------
+        >>> from mpmath import iv
+        >>> (x, y), _ = RRLeg((1.0, 0.0), 2.0, 3.0, "t").knee_exact(iv.mpf(0), iv)
+        >>> float(x.a), float(y.b)
+        (3.0, 0.0)
+        """
+        r = ctx.mpf(self.proximal)
+        c, s = ctx.cos(angle) * r, ctx.sin(angle) * r
+        return (c + ctx.mpf(self.base[0]), s + ctx.mpf(self.base[1])), (-s, c)
+
     def _knee_boxes_intervals(self, angles: Interval) -> tuple[list[Interval], ...]:
         """:meth:`knee_boxes` by :class:`Interval` operations (the reference)."""
         c, s = iv.cos(angles) * self.proximal, iv.sin(angles) * self.proximal
