@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from mpmath import mp, mpf
 
+import moveability.analysis.joint_space as js
 from moveability.analysis.joint_space import count_in_joint_space, joint_condition
 from moveability.analysis.stop_traces import trace_runs
 from moveability.limits import JointLimit
@@ -175,3 +176,27 @@ def test_a_stop_that_only_touches_d_is_said_degenerate_or_decided():
     assert found.at_least >= plain.at_least
     if plain.at_most is not None and found.at_most is not None:
         assert found.at_most <= plain.at_most
+
+
+@pytest.mark.parametrize(
+    "m",
+    [
+        FiveBar(5.2, 5.587, 1.26, 5.06, 1.26, (
+            JointLimit(5.309109137899916, 11.309109137899917),
+            JointLimit(-1.7901937514267752, -1.7701937514267752),
+        )),
+        FiveBar(4.92, 1.45, 3.54, 1.45, 3.54, (
+            JointLimit(3.100793040404903, 3.120793040404903),
+            JointLimit(-1.183562865822816, 1.816437134177184),
+        )),
+    ],
+)  # fmt: skip
+def test_pieces_of_blocks_on_two_stops_join_where_they_share_a_point(m):
+    """Narrow windows: blocks on two stops meet near a corner of Q. A point of D
+    that one block's trace certifies (an end of its run) lies in the other's
+    closed box, and so in one of its pieces: the two join, and the traces alone
+    decide what the plain count decides."""
+    plain = count_in_joint_space(m, stop_traces=False)
+    assert plain.decided
+    traced = js._count(m, joint_condition(m), None, None, True)
+    assert (traced.at_least, traced.at_most) == (plain.at_least, plain.at_most)

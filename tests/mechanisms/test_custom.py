@@ -11,6 +11,7 @@ import tomllib
 import numpy as np
 import pytest
 
+from custom_specs import five_bar_spec
 from moveability import analyze, plan_motion
 from moveability.errors import SpecError
 from moveability.limits import JointLimit
@@ -19,26 +20,6 @@ from moveability.mechanisms.custom import CustomMechanism, normalise_custom_spec
 
 EXAMPLE = pathlib.Path(__file__).parents[2] / "examples" / "five-bar-custom.toml"
 PRECISION = 0.5
-
-
-def five_bar_spec(lengths=(7.0, 8.0, 5.0, 8.0, 5.0), limits=(0.0, "pi")) -> dict:
-    L0, L1, L2, L3, L4 = lengths
-    reach = max(L1 + L2, L3 + L4)
-    return {
-        "mechanism": "custom",
-        "pose": ["x", "y"],
-        "joints": ["t1", "t2"],
-        "parameters": dict(zip(("L0", "L1", "L2", "L3", "L4"), lengths, strict=True)),
-        "legs": [
-            {"joint": "t1", "constraint": "(x - L1*cos(t1))**2 + (y - L1*sin(t1))**2 - L2**2"},
-            {
-                "joint": "t2",
-                "constraint": "(x - L0 - L3*cos(t2))**2 + (y - L3*sin(t2))**2 - L4**2",
-            },
-        ],
-        "limits": {"t1": list(limits), "t2": list(limits)},
-        "bounds": {"x": [-reach - 1.0, L0 + reach + 2.0], "y": [-reach - 1.0, reach + 1.0]},
-    }
 
 
 DESIGNS = [

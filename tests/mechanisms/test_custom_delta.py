@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+from custom_specs import custom_delta_spec
 from moveability import analyze
 from moveability.analysis.result import analysis_box
 from moveability.hypertree.status import IN, OUT
@@ -34,8 +35,6 @@ EXAMPLES = pathlib.Path(__file__).parents[2] / "examples"
 PHI = np.arange(3) * 2.0 * np.pi / 3.0
 U = np.stack([np.cos(PHI), np.sin(PHI), np.zeros(3)], axis=1)
 # u_i's components as written in the constraints (exact: sqrt(3) is enclosed)
-_COS = ("1", "(-1/2)", "(-1/2)")
-_SIN = ("0", "(sqrt(3)/2)", "(-sqrt(3)/2)")
 #: every choice of branches of the three legs
 BRANCHES = [(b0, b1, b2) for b0 in (0, 1) for b1 in (0, 1) for b2 in (0, 1)]
 
@@ -48,31 +47,6 @@ DESIGNS = {
         1.0,
     ),
 }
-
-
-def custom_delta_spec(design, limits, bounds) -> dict:
-    """The Delta of ``design`` and ``limits`` as a custom spec over ``bounds``."""
-    R, r, la, lb = design
-    legs = []
-    for i in range(3):
-        t, c, s = f"t{i + 1}", _COS[i], _SIN[i]
-        h = f"(r - (R + la*cos({t})))"
-        legs.append(
-            {
-                "joint": t,
-                "constraint": f"(x + {c}*{h})**2 + (y + {s}*{h})**2 + (z + la*sin({t}))**2 - lb**2",
-            }
-        )
-    lo, hi = bounds
-    return {
-        "mechanism": "custom",
-        "pose": ["x", "y", "z"],
-        "joints": ["t1", "t2", "t3"],
-        "parameters": {"R": R, "r": r, "la": la, "lb": lb},
-        "legs": legs,
-        "limits": {f"t{i + 1}": [float(a), float(b)] for i, (a, b) in enumerate(limits)},
-        "bounds": {n: [float(lo[k]), float(hi[k])] for k, n in enumerate("xyz")},
-    }
 
 
 # ------------------------------------------------------------------ closed form

@@ -134,10 +134,31 @@ def has_dyads(mechanism: Mechanism) -> bool:
     """
     legs = mechanism.legs
     return (
-        tuple(mechanism.pose_names) == ("x", "y")
+        len(mechanism.pose_names) == 2
+        and not mechanism.periodic_axes
         and len(legs) == 2
         and all(hasattr(leg, "knee_boxes") and hasattr(leg, "distal") for leg in legs)
+        and _reach_within_bounds(mechanism)
     )
+
+
+def _reach_within_bounds(mechanism: Mechanism) -> bool:
+    """Whether every pose the legs reach lies in the mechanism's box of poses:
+    the count in Q holds every configuration, so a box that cuts the workspace
+    (a user-defined one may) would make it count regions it does not hold."""
+    if mechanism.bounds_hold_workspace:
+        return True
+    lo_box, hi_box = (np.asarray(b, dtype=np.float64) for b in mechanism.bounds)
+    lo_q, hi_q, _ = _joint_box(mechanism)
+    reach_lo = np.full(lo_box.size, -np.inf)
+    reach_hi = np.full(lo_box.size, np.inf)
+    for i, leg in enumerate(mechanism.legs):
+        (knee, _, _) = leg.knee_boxes(Interval(lo_q[i : i + 1], hi_q[i : i + 1]))  # type: ignore[attr-defined]
+        b = float(leg.distal)  # type: ignore[attr-defined]
+        for j, c in enumerate(knee):
+            reach_lo[j] = max(reach_lo[j], float(c.lo[0]) - b)
+            reach_hi[j] = min(reach_hi[j], float(c.hi[0]) + b)
+    return bool((reach_lo >= lo_box).all() and (reach_hi <= hi_box).all())
 
 
 def joint_condition(mechanism: Mechanism) -> Any:
@@ -158,7 +179,8 @@ def joint_condition(mechanism: Mechanism) -> Any:
     if has_dyads(mechanism):
         return _Distance(mechanism)
     own = getattr(mechanism, "joint_condition", None)
-    return own() if callable(own) else None
+    condition = own() if callable(own) else None
+    return condition if condition is not None and _reach_within_bounds(mechanism) else None
 
 
 def _joint_box(mechanism: Mechanism) -> tuple[Array, Array, tuple[int, ...]]:
@@ -486,11 +508,38 @@ def count_in_joint_space(
     distance = joint_condition(mechanism)
     if distance is None:
         return None
-    exact = getattr(mechanism, "exact_region_count", None)
-    if closed_form and callable(exact):
+    exact = mechanism.exact_region_count() if closed_form else None
+    if exact is not None:
         # D decided in closed form (the biglide's bands)
-        n, witnesses, notes = exact()
+        n, witnesses, notes = exact
         return JointSpaceCount(2 * n, 2 * n, 0, 0.0, witnesses, notes)
+    found = _count(mechanism, distance, max_depth, max_leaves, stop_traces)
+    if stop_traces and not found.decided and len(mechanism.limits) == 2:
+        # the traces' boxes are never split: where they leave the count open, the
+        # plain refinement may still close it (both bounds are proved)
+        plain = _count(mechanism, distance, max_depth, max_leaves, False)
+        if plain.decided:
+            return plain
+        tops = [c.at_most for c in (found, plain) if c.at_most is not None]
+        return JointSpaceCount(
+            at_least=max(found.at_least, plain.at_least),
+            at_most=min(tops) if tops else None,
+            leaves=found.leaves,
+            open_measure=found.open_measure,
+            witnesses=found.witnesses,
+            notes=found.notes,
+        )
+    return found
+
+
+def _count(
+    mechanism: Mechanism,
+    distance: Any,
+    max_depth: int | None,
+    max_leaves: int | None,
+    stop_traces: bool,
+) -> JointSpaceCount:
+    """:func:`count_in_joint_space` on the tree of Q, with or without stop traces."""
     lo, hi, periodic = _joint_box(mechanism)
     k = lo.size
     if max_leaves is None:

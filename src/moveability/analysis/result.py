@@ -8,6 +8,7 @@ from :mod:`moveability.analysis.regions`; every answer is three-valued.
 
 from __future__ import annotations
 
+import copy
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, fields
@@ -275,8 +276,16 @@ def analyze(
     if not (np.isfinite(resolve_growth) and resolve_growth >= 0):
         raise InvalidParameterError("resolve_growth", "a number >= 0", resolve_growth)
     # the levels below the precision must fit in the keys too
-    # without flows (legs given by constraints alone) no refinement can prove a bound
-    resolve = bool(resolve) and supports_flows(mechanism)
+    # two dyads, the Delta: the count is also proved in the joint space (see
+    # joint_space), which knows the paper's hypotheses only
+    in_joints = (
+        not generalized_aspects
+        and mechanism.restrictions.empty
+        and joint_condition(mechanism) is not None
+    )
+    # without flows (legs given by constraints alone) no refinement can prove a
+    # bound, but the joint space's count may, and its regions are listed then
+    resolve = bool(resolve) and (supports_flows(mechanism) or in_joints)
     extra = min(int(resolve_levels), (MAX_KEY_BITS - sum(depths)) // len(depths)) if resolve else 0
 
     # the sheet tables of the cells that may end as leaves: the analysis reuses
@@ -340,11 +349,8 @@ def analyze(
             f"(at most max_leaves={max_leaves} leaves)",
             precision,
         ) from None
-    # two dyads, the Delta: the count is also proved in the joint space (see joint_space)
     joint = None
-    # the joint-space count knows the paper's hypotheses only
-    paper = mechanism.restrictions.empty
-    if resolve and not generalized_aspects and joint_condition(mechanism) is not None and paper:
+    if resolve and in_joints:
         phase(progress, "counting the regions in the joint space")
         joint = count_in_joint_space(mechanism)
     phase(progress, "joining the regions")
@@ -1021,11 +1027,11 @@ class Analysis:
         self._flows: tuple[Any, ...] | None = None
         #: (2, n, P): open nodes for det A > 0 (0) and < 0 (1), where a region might hide
         self.open_nodes = np.zeros((2, *self.table.status.shape), dtype=bool)
-        #: see :meth:`unlisted_witnesses` and :meth:`_witness_nodes`, found when first asked
-        self._unlisted: NDArray[np.bool_] | None = None
+        #: see :meth:`_witness_nodes` and :attr:`undecided`, found when first asked
         self._witnessed: tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.bool_]] | None = (
             None
         )
+        self._undecided: dict[str, Any] | None = None
         if not self._listed_are_all():
             self._attach(leaves, flows_of, saved)
         elif saved is not None:
@@ -1270,8 +1276,7 @@ class Analysis:
         if self.complete:
             # every region is listed: no neck or hiding place can change the count
             return mask
-        joint = self.joint_count
-        if joint is not None and joint.decided and self._witness_nodes()[0].size == joint.at_least:
+        if self._witnesses_placed():
             # the regions are listed at the witnesses once each is certified (see
             # _witness_parts): no neck needs splitting for that
             return mask
@@ -1327,15 +1332,21 @@ class Analysis:
         of such a pose is returned while the node of its posture there is not
         certified. Refined there, the region gets a certified part and is listed
         (listed there once every witness is, see :meth:`_witness_parts`)."""
-        if self._unlisted is None:
-            self._unlisted = self._find_unlisted()
-        return self._unlisted.copy()
-
-    def _find_unlisted(self) -> NDArray[np.bool_]:
         out = np.zeros(len(self.areas), dtype=bool)
         leaf, _, certified = self._witness_nodes()
         out[leaf[~certified]] = True
         return out
+
+    def _witnesses_placed(self) -> bool:
+        """Whether the joint-space count is proved and a witness configuration of
+        each region it proves lies in the tree (certified or not yet)."""
+        joint = self.joint_count
+        return bool(
+            joint is not None
+            and joint.decided
+            and joint.witnesses.size
+            and self._witness_nodes()[0].size == joint.at_least
+        )
 
     def _witness_parts(self) -> list[int] | None:
         """The certified parts holding the witness configurations of a decided
@@ -1346,11 +1357,10 @@ class Analysis:
         certified cells of Q, or two signs of det A), so their parts are in
         distinct regions, and being as many as the count they are all the
         regions."""
-        joint = self.joint_count
-        if joint is None or not joint.decided or not joint.witnesses.size:
+        if not self._witnesses_placed():
             return None
         leaf, posture, certified = self._witness_nodes()
-        if leaf.size != joint.at_least or not certified.all():
+        if not certified.all():
             return None
         parts = self.graph.certain[leaf, posture]
         if np.unique(parts).size != parts.size:
@@ -1698,6 +1708,11 @@ class Analysis:
         bounding boxes (see :func:`~moveability.analysis.open_parts.open_parts`);
         no part once both are decided.
         """
+        if self._undecided is None:
+            self._undecided = self._find_undecided()
+        return copy.deepcopy(self._undecided)
+
+    def _find_undecided(self) -> dict[str, Any]:
         g = self.graph
         complete = self.complete
         unresolved = [] if complete else self._unresolved

@@ -282,6 +282,9 @@ def find_blocks(
     b_lo = (anchors[leaf] // size) * size
     b_hi = b_lo + size
     lo, hi = cell_corners(tree.lo, tree.hi, tree.layout, b_lo, level)
+    # on the faces of Q, the limits themselves
+    lo = np.where(b_lo == 0, tree.lo, lo)
+    hi = np.where(b_hi == extent, tree.hi, hi)
     with np.errstate(invalid="ignore", over="ignore"):
         value, grad, _ = distance.terms(lo, hi, hessian=False)
     meets_low = value.lo <= distance.lower.hi
@@ -351,9 +354,10 @@ def block_labels(
     to it. A piece is joined to a leaf beside the block that shares a boundary
     with one of its leaves over the piece's outer range of t (possibly), and
     certainly to an IN one whose shared boundary meets that range alone (that
-    boundary lies in D, so over the trace). Pieces of blocks end to end on one
-    stop are joined certainly where both hold the common end; pieces of other
-    blocks that touch, possibly.
+    boundary lies in D, so over the trace). Pieces that hold one end point of
+    their traces (blocks end to end on one stop, or meeting at a corner of Q on
+    two stops) are joined certainly; pieces of other blocks that touch,
+    possibly.
 
     Returns
     -------
@@ -411,21 +415,31 @@ def block_labels(
                     possible_edges.append(
                         np.array([[pieces[p], n + offsets[k2] + q]], dtype=np.int64)
                     )
-    # blocks end to end on one stop: pieces that hold their common end join there
-    for k1, one in enumerate(blocks):
-        for k2, two in enumerate(blocks):
-            t = 1 - one.axis
-            if (
-                two.axis != one.axis
-                or two.value != one.value
-                or one.anchor[t] + one.size[t] != two.anchor[t]
-            ):
+    # pieces that hold one end point of their box's trace (a point of D on the
+    # stop), as blocks end to end on one stop or at a corner of Q on two do
+    by_point: dict[tuple[float, float], list[int]] = {}
+    for k, block in enumerate(blocks):
+        t = 1 - block.axis
+        for p, run in enumerate(block.runs):
+            for end, held in ((block.lo[t], run[3]), (block.hi[t], run[4])):
+                if held > 0:
+                    point = [0.0, 0.0]
+                    point[block.axis], point[t] = block.value, float(end)
+                    by_point.setdefault((point[0], point[1]), []).append(n + offsets[k] + p)
+    # such a point lies in D: in any other block whose closed box holds it, it
+    # hangs from that block's stop over one run, and joins that run's piece too
+    for (x, y), nodes in by_point.items():
+        for k, block in enumerate(blocks):
+            t = 1 - block.axis
+            if not (block.lo[0] <= x <= block.hi[0] and block.lo[1] <= y <= block.hi[1]):
                 continue
-            ends = n + offsets[k1] + np.flatnonzero(one.runs[:, 4] > 0)
-            starts = n + offsets[k2] + np.flatnonzero(two.runs[:, 3] > 0)
-            joined = np.stack(np.meshgrid(ends, starts), axis=-1).reshape(-1, 2)
-            possible_edges.append(joined)
-            certain_edges.append(joined)
+            at = (x, y)[t]
+            (over,) = np.nonzero((block.runs[:, 0] <= at) & (at <= block.runs[:, 1]))
+            if over.size == 1:
+                nodes.append(n + offsets[k] + int(over[0]))
+        joined = np.array([(nodes[0], other) for other in set(nodes[1:])], dtype=np.int64)
+        possible_edges.append(joined.reshape(-1, 2))
+        certain_edges.append(joined.reshape(-1, 2))
     possible, n_possible = _labels(n_nodes, possible_edges, maybe)
     certain, n_certain = _labels(n_nodes, certain_edges, sure)
     return possible, n_possible, certain, n_certain

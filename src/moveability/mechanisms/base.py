@@ -752,6 +752,13 @@ class Mechanism:
         (:func:`leg_reach`)."""
         return [leg_reach(leg, lo, hi, folds=folds) for leg in self.legs], None
 
+    def exact_region_count(self) -> tuple[int, NDArray[np.float64], tuple[str, ...]] | None:
+        """The number of components of the joint space's non-singular set D (see
+        :mod:`moveability.analysis.joint_space`) decided in closed form, with a
+        joint vector inside each and notes on exact degeneracies, where the
+        mechanism knows it (the biglide); None here."""
+        return None
+
     def identically_singular(self, posture: int) -> bool:
         """Whether det A vanishes on every configuration of a posture (it then holds
         no configuration of any region). Mechanisms that know such postures say so."""

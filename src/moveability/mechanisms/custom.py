@@ -77,6 +77,13 @@ parameter values, is built without importing sympy. A body read back is compiled
 one the printer could have written (numbers, the arguments, ``PI``, ``+``,
 ``*`` and calls of the guarded functions).
 
+A leg whose constraint is ``lam (|X - K(q)|^2 - b^2)`` (``lam`` a nonzero
+number, ``b`` free of the pose and the joint) is a dyad: sympy finds its knee
+``K`` and radius ``b``, and the leg is a :class:`~.dyad_leg.DyadLeg`, which
+the joint-space count of :mod:`moveability.analysis.joint_space` takes as it
+takes the built-in twins' legs (two over two pose axes; three of one radius
+over three, :meth:`CustomMechanism.joint_condition`).
+
 Entry points: :func:`normalise_custom_spec` and :class:`CustomMechanism`.
 """
 
@@ -109,6 +116,7 @@ from . import tape as tp
 from .base import Mechanism
 from .constraint_leg import ConstraintLeg
 from .constraints import ConstraintMargins, Constraints
+from .dyad_leg import DyadLeg, SphereCentres
 from .sheet_det import det_along_sheets, dets_along_sheets
 
 if TYPE_CHECKING:
@@ -383,6 +391,33 @@ def _compile_body(body: str, n_args: int, key: str) -> Callable[..., Any]:
     g.traceable = trace_ns["_g"]  # type: ignore[attr-defined]
     g.float_traceable = float_trace_ns["_g"]  # type: ignore[attr-defined]
     return g
+
+
+def _mp_function(body: str, n_args: int, values: Sequence[float], k: int) -> Callable[..., Any]:
+    """The printed ``body`` of ``(x_1, ..., x_k, q, *parameters)`` with the
+    parameters bound, as ``h(q, ctx)`` in an mpmath interval context ``ctx``
+    (the pose is given as 0: for bodies free of it, as the knees')."""
+    source = f"def _g({', '.join(f'_a{i}' for i in range(n_args))}):\n    return {body}\n"
+    code = compile(source, "<knee>", "exec")
+    compiled: dict[int, Callable[..., Any]] = {}
+
+    def h(q: Any, ctx: Any) -> Any:
+        g = compiled.get(id(ctx))
+        if g is None:
+            ns: dict[str, Any] = {
+                name: getattr(ctx, name) for name in ("sin", "cos", "tan", "exp", "log", "sqrt")
+            }
+            ns.update(
+                PI=ctx.pi,
+                power=lambda b, n: b**n,
+                rational=lambda p, r: ctx.mpf(p) / r,
+                absolute=abs,
+            )
+            exec(code, ns)  # printed from a checked sympy tree
+            g = compiled[id(ctx)] = ns["_g"]
+        return g(*([ctx.mpf(0)] * k), q, *(ctx.mpf(v) for v in values))
+
+    return h
 
 
 class BoundExpression:
@@ -798,6 +833,8 @@ def _leg_bodies(spec: Mapping[str, Any]) -> dict[str, str]:
             out[name] = _printed_derivative(printer, expr, what, key)
         if leg["kind"] == "prismatic":
             out.update(_second_derivative_bodies(f, pose_syms, q, printer, i))
+        if not spec["periodic"]:
+            out.update(_knee_bodies(f, pose_syms, q, printer, i))
         pose_printer = _Printer({sym: f"_a{a}" for a, sym in enumerate([*pose_syms, *param_syms])})
         for b, text in enumerate(leg.get("branches", [])):
             out[f"{i}.branch.{b}"] = pose_printer(_parse(text, f"legs[{i}].branches[{b}]", symbols))
@@ -833,6 +870,49 @@ def _second_derivative_bodies(
             out[f"{i}.d2f_dqdx.{j}"] = printer(sympy.diff(row, q))
             for k, xk in enumerate(pose[j:], start=j):
                 out[f"{i}.d2f_dxdx.{j}.{k}"] = printer(sympy.diff(row, xk))
+    except SpecError:
+        return {}
+    return out
+
+
+def _knee_bodies(
+    f: sympy.Expr, pose: list[sympy.Symbol], q: sympy.Symbol, printer: _Printer, i: int
+) -> dict[str, str]:
+    """Where leg ``i``'s constraint is ``lam (|X - K(q)|^2 - b^2)`` with ``lam`` a
+    nonzero number and ``b^2`` free of the pose and the joint (a dyad, see
+    :mod:`.dyad_leg`): the knee ``K_j`` and its first two derivatives, printed
+    (``"{i}.knee.{j}"``, ``"{i}.knee_rate.{j}"``, ``"{i}.knee_curve.{j}"``),
+    and ``b^2`` (``"{i}.distal2"``); none otherwise."""
+    try:
+        poly = sympy.Poly(sympy.expand(f), *pose)
+    except sympy.PolynomialError:
+        return {}
+    if poly.total_degree() != 2:
+        return {}
+    lam = poly.coeff_monomial(pose[0] ** 2)
+    if not lam.is_number or lam == 0:
+        return {}
+    knee = []
+    for x in pose:
+        if sympy.simplify(poly.coeff_monomial(x**2) - lam) != 0:
+            return {}
+        knee.append(-poly.coeff_monomial(x) / (2 * lam))
+    for monomial in poly.monoms():
+        degree = sum(monomial)
+        if degree == 2 and max(monomial) != 2:
+            return {}  # a cross term x_j x_k
+    constant = poly.coeff_monomial(1)
+    distal2 = sympy.expand(sum(k**2 for k in knee) - constant / lam)
+    if q in distal2.free_symbols:
+        distal2 = sympy.simplify(distal2)
+    if q in distal2.free_symbols or set(pose) & distal2.free_symbols:
+        return {}
+    out = {f"{i}.distal2": printer(distal2)}
+    try:
+        for j, k in enumerate(knee):
+            out[f"{i}.knee.{j}"] = printer(k)
+            out[f"{i}.knee_rate.{j}"] = printer(sympy.diff(k, q))
+            out[f"{i}.knee_curve.{j}"] = printer(sympy.diff(k, q, 2))
     except SpecError:
         return {}
     return out
@@ -1118,8 +1198,30 @@ class CustomMechanism(Mechanism):
                     bind(f"{i}.d2f_dqdx.{j}", f"d2{key}/d{q_name}d{x}")
                     for j, x in enumerate(s["pose"])
                 )
+            dyad: dict[str, Any] = {}
+            if all(f"{i}.knee.{j}" in bodies for j in range(k)):
+                radius2 = _compile_body(bodies[f"{i}.distal2"], n_args, key)
+                b2 = float(radius2(*[0.0] * (k + 1), *values))
+                if b2 > 0:
+                    dyad = {
+                        "distal": math.sqrt(b2),
+                        **{
+                            name: tuple(
+                                bind(f"{i}.{name}.{j}", f"{name} of {key}") for j in range(k)
+                            )
+                            for name in ("knee", "knee_rate", "knee_curve")
+                        },
+                        "knee_mp": tuple(
+                            _mp_function(bodies[f"{i}.knee.{j}"], n_args, values, k)
+                            for j in range(k)
+                        ),
+                        "knee_mp_rate": tuple(
+                            _mp_function(bodies[f"{i}.knee_rate.{j}"], n_args, values, k)
+                            for j in range(k)
+                        ),
+                    }
             legs.append(
-                ConstraintLeg(
+                (DyadLeg if dyad else ConstraintLeg)(
                     leg["joint"],
                     f=bind(f"{i}.f", key),
                     df_dq=bind(f"{i}.df_dq", f"d{key}/d{q_name}"),
@@ -1132,6 +1234,7 @@ class CustomMechanism(Mechanism):
                     closed_form=closed,
                     d2f_dxdx=d2f_dxdx,
                     d2f_dqdx=d2f_dqdx,
+                    **dyad,
                 )
             )
             for name, item in leg.get("passive", {}).items():
@@ -1151,6 +1254,22 @@ class CustomMechanism(Mechanism):
             np.array([s["bounds"][n][0] for n in s["pose"]], dtype=np.float64),
             np.array([s["bounds"][n][1] for n in s["pose"]], dtype=np.float64),
         )
+
+    def joint_condition(self) -> SphereCentres | None:
+        """Three dyad legs on spheres of one radius about knees (a Delta written as
+        a spec): the condition whose components in the joint space are the
+        regions (:class:`~moveability.mechanisms.dyad_leg.SphereCentres`); None
+        otherwise (two dyads are found by the joint space itself)."""
+        legs = self.legs
+        if (
+            len(self.pose_names) != 3
+            or len(legs) != 3
+            or self.periodic_axes
+            or not all(isinstance(leg, DyadLeg) for leg in legs)
+            or len({leg.distal for leg in legs}) != 1  # type: ignore[attr-defined]
+        ):
+            return None
+        return SphereCentres(legs)  # type: ignore[arg-type]
 
     @classmethod
     def from_spec(cls, spec: Mapping[str, Any]) -> CustomMechanism:
