@@ -349,9 +349,18 @@ def test_joint_space_traces_are_filled(spec):
 
 def test_user_defined_joint_space_is_sampled_inside_d():
     """Without forward kinematics the traces come from sampled configurations: they
-    stay where the legs of the same five-bar can meet, and the figures still draw."""
+    stay where the legs of the same five-bar can meet, and the figures still draw.
+    (The legs written as distances, not squared: no dyads are recognised.)"""
     pytest.importorskip("sympy")
-    analysis = analyze(load_spec("examples/five-bar-custom.toml"), precision=0.3)
+    spec = dict(load_spec("examples/five-bar-custom.toml"))
+    spec["legs"] = [
+        {"joint": "t1", "constraint": "sqrt((x - L1*cos(t1))**2 + (y - L1*sin(t1))**2) - L2"},
+        {
+            "joint": "t2",
+            "constraint": "sqrt((x - L0 - L3*cos(t2))**2 + (y - L3*sin(t2))**2) - L4",
+        },
+    ]
+    analysis = analyze(spec, precision=0.3)
     q1, q2, holds = joint_space_raster(analysis, resolution=90)
     assert holds.shape == (30, 30, len(analysis.regions) + 2)
     reference = load_spec(SPEC)
@@ -368,6 +377,10 @@ def test_user_defined_joint_space_is_sampled_inside_d():
     assert "sampled" in ax.get_title()
     fig = plot_postures(analysis.mechanism, np.array([3.5, 6.0]))
     assert all(_within_limits(ax, np.array([[3.5, 6.0]])) for ax in _shown(fig))
+    # written as the example writes them, the legs are dyads: forward kinematics
+    dyads = analyze(load_spec("examples/five-bar-custom.toml"), precision=0.3)
+    assert joint_space_raster(dyads, resolution=90)[2].shape[:2] == (90, 90)
+    assert "sampled" not in plot_joint_space(dyads, resolution=90).axes[0].get_title()
 
 
 def test_joint_space_draws_limits_and_singular_curves(result):

@@ -124,7 +124,10 @@ class JointSpaceCount:
 
 def has_dyads(mechanism: Mechanism) -> bool:
     """Whether the mechanism is two dyads meeting at a planar platform point (the
-    five-bar, the biglide): legs that give :meth:`knee_boxes` and a ``distal`` link.
+    five-bar, the biglide, user-defined legs of the form
+    :class:`~moveability.mechanisms.dyad_leg.DyadLeg`): legs that give
+    :meth:`knee_boxes` and a ``distal`` link, over two pose axes that are not
+    periodic, in a box of poses that holds all they reach.
 
     Examples
     --------
