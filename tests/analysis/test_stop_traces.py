@@ -23,6 +23,7 @@ from moveability.analysis.joint_space import count_in_joint_space, joint_conditi
 from moveability.analysis.stop_traces import trace_runs
 from moveability.limits import JointLimit
 from moveability.mechanisms import FiveBar
+from region_references import joint_space_count
 
 
 def _quadratic(r: float, delta: str):
@@ -200,3 +201,38 @@ def test_pieces_of_blocks_on_two_stops_join_where_they_share_a_point(m):
     assert plain.decided
     traced = js._count(m, joint_condition(m), None, None, True)
     assert (traced.at_least, traced.at_most) == (plain.at_least, plain.at_most)
+
+
+@pytest.mark.parametrize(
+    "lengths, theta1, theta2, upper, count",
+    [
+        # theta1's lower stop: the hole d < L2 - L4 stays 4.4e-16 (in d^2) off it
+        ((1.3, 6.0, 4.6, 4.8, 3.8), (-1.152976021597577, 1.8354377097000063),
+         (-3.493129765509691, -0.8884375392349664), False, 4),
+        # theta1's upper stop: 1.3e-14 inside d < L2 + L4, a channel along it
+        ((7.1, 3.5, 4.5, 3.0, 4.0), (-3.758039976546116, -0.8604284956229948),
+         (-1.5877925377533861, 1.5135518559151502), True, 2),
+    ],
+)  # fmt: skip
+def test_channels_along_a_stop_narrower_than_a_float_are_counted(
+    lengths, theta1, theta2, upper, count
+):
+    """Two designs of benchmarks/bench_counts.py whose stop runs a hair inside D at
+    its tangency: a grid of Q splits D there (a 1200 x 1200 grid counts one
+    component more), the traces join it. The margin at the tangency, from the
+    closed form of the knees' distance along the stop at 50 digits, says the
+    stop lies in D; the design with that stop moved 1e-2 further into D (no
+    near-degeneracy left) has the same count, without traces and on the grid."""
+    m = FiveBar(*lengths, (JointLimit(*theta1), JointLimit(*theta2)))
+    low_side = not upper
+    with mp.workdps(50):
+        margin = _tangent_margin(m, low_side, 0.0)
+    assert 0 < margin < 1e-13
+    found = count_in_joint_space(m)
+    assert found.decided and found.at_least == count
+    with mp.workdps(50):
+        step = 1e-2 if _tangent_margin(m, low_side, 1e-2) > margin else -1e-2
+    moved = _moved(m, low_side, step)
+    far = count_in_joint_space(moved, stop_traces=False)
+    assert far.decided and far.at_least == count
+    assert joint_space_count(moved, 1200) == count
