@@ -9,6 +9,8 @@ designs that need them (equal distal links, free joints); and the count as
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from mpmath import mp, mpf
@@ -284,3 +286,19 @@ def test_a_stop_exactly_at_a_parallel_singularity_is_named():
     result = analyze(m, precision=0.1)
     assert result.notes == found.notes and result.to_dict()["notes"] == [note]
     assert note in result.summary()
+
+
+def test_a_trace_undecided_on_a_degenerate_point_is_named():
+    """L0 = 2, L1 = L3 = 1: the knees are exactly L2 + L4 = 2 apart wherever
+    theta1 = theta2 (a parallelogram), so the stop traces meet a point where d^2
+    is exactly its bound and no precision decides: the output says where."""
+    m = five_bar((2.0, 1.0, 1.0, 1.0, 1.0), (0.0, 1.5), (-1.5, 1.5))
+    found = count_in_joint_space(m)
+    assert not found.decided
+    (note,) = found.notes
+    assert note.startswith("degenerate design") and "exactly or within one float" in note
+    values = dict(re.findall(r"(theta\d) = (-?[\d.e+-]+)", note))
+    with mp.workdps(50):
+        a, b = mpf(values["theta1"]), mpf(values["theta2"])
+        d2 = (mp.cos(a) - 2 - mp.cos(b)) ** 2 + (mp.sin(a) - mp.sin(b)) ** 2
+        assert abs(d2 - 4) < mpf("1e-40")

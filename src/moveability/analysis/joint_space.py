@@ -433,6 +433,23 @@ def _degenerate_notes(
     )
 
 
+def _trace_notes(
+    mechanism: Mechanism, degenerate: list[tuple[int, float, float]], decided: bool
+) -> tuple[str, ...]:
+    """A line where the count stays open and a stop trace failed on a degenerate
+    point (see :func:`~moveability.analysis.stop_traces.trace_runs`); none
+    otherwise."""
+    if decided or not degenerate:
+        return ()
+    axis, stop, t = degenerate[0]
+    names = mechanism.joint_names
+    return (
+        f"degenerate design: the boundary of the non-singular joint set touches the "
+        f"stop {names[axis]} = {stop:.9g} at {names[1 - axis]} = {t:.9g}, exactly or "
+        "within one float (undecided there at 424 bits); no precision decides it",
+    )
+
+
 def witness_configurations(
     mechanism: Mechanism, joints: Array
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
@@ -562,6 +579,7 @@ def _count(
     # boxes on a stop decided by D's trace there (two joints), and those that failed
     blocks: list[StopBlock] = []
     failed: set[tuple[int, int, int]] = set()
+    degenerate: list[tuple[int, float, float]] = []
     while True:
         leaves = tree.leaves()
         member = block_members(tree, blocks)
@@ -600,7 +618,7 @@ def _count(
         mask &= several | loose
         if at_least != at_most and k == 2 and stop_traces:
             # where D meets a stop, its trace there may decide what no cell does
-            new = find_blocks(tree, distance, np.flatnonzero(mask), blocks, failed)
+            new = find_blocks(tree, distance, np.flatnonzero(mask), blocks, failed, degenerate)
             if new:
                 blocks.extend(new)
                 continue
@@ -614,6 +632,7 @@ def _count(
                 leaves=len(tree),
                 open_measure=open_measure,
                 witnesses=_witnesses(leaves, volumes, certain, n_certain, blocks, distance),
-                notes=_degenerate_notes(mechanism, leaves.lo[still], leaves.hi[still], hi - lo),
+                notes=_degenerate_notes(mechanism, leaves.lo[still], leaves.hi[still], hi - lo)
+                or _trace_notes(mechanism, degenerate, at_least == at_most),
             )
         tree = tree.refine(mask, distance.classify)

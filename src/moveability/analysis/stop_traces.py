@@ -115,10 +115,15 @@ class StopBlock:
         return out
 
 
-def trace_runs(phi: TraceFunction, t_lo: float, t_hi: float) -> NDArray[np.float64] | None:
+def trace_runs(
+    phi: TraceFunction, t_lo: float, t_hi: float, where: list[float] | None = None
+) -> NDArray[np.float64] | None:
     """The runs of ``{t in [t_lo, t_hi] : phi(t) > 0}`` (see the module notes),
     as rows ``(outer lo, outer hi, t inside, holds t_lo, holds t_hi)``; None
-    where undecided at every precision.
+    where undecided at every precision. Then ``where``, when given, receives
+    the t where the last precision stopped, if phi's sign was undecided there
+    or within one float of it (phi is zero there, or within about 1e-120 of
+    zero: a degenerate design), and nothing if the breakpoints ran out.
 
     Examples
     --------
@@ -134,14 +139,18 @@ def trace_runs(phi: TraceFunction, t_lo: float, t_hi: float) -> NDArray[np.float
     from mpmath import iv
 
     saved = iv.prec
+    stuck: list[float] = []
     try:
         for bits in PRECISIONS:
             iv.prec = bits
-            found = _runs_at(iv, phi, float(t_lo), float(t_hi))
+            stuck = []
+            found = _runs_at(iv, phi, float(t_lo), float(t_hi), stuck)
             if found is not None:
                 return found
     finally:
         iv.prec = saved
+    if where is not None:
+        where.extend(stuck)
     return None
 
 
@@ -173,9 +182,12 @@ def _settled(ctx: Any, phi: TraceFunction, u: float, v: float, same: bool) -> bo
     return bool(centred.a > 0 or centred.b < 0)
 
 
-def _runs_at(ctx: Any, phi: TraceFunction, t_lo: float, t_hi: float) -> NDArray[np.float64] | None:
+def _runs_at(
+    ctx: Any, phi: TraceFunction, t_lo: float, t_hi: float, stuck: list[float]
+) -> NDArray[np.float64] | None:
     s_lo, s_hi = _sign(ctx, phi, t_lo), _sign(ctx, phi, t_hi)
     if s_lo is None or s_hi is None:
+        stuck.append(t_lo if s_lo is None else t_hi)
         return None
     points, signs = [t_lo], [s_lo]
     # left to right: the pieces still to settle, by their right ends
@@ -188,9 +200,12 @@ def _runs_at(ctx: Any, phi: TraceFunction, t_lo: float, t_hi: float) -> NDArray[
             signs.append(s_v)
             stack.pop()
             continue
+        if len(points) + len(stack) > MAX_BREAKPOINTS:
+            return None
         m = 0.5 * (u + v)
         s_m = _sign(ctx, phi, m) if u < m < v else None
-        if s_m is None or len(points) + len(stack) > MAX_BREAKPOINTS:
+        if s_m is None:
+            stuck.append(m)
             return None
         stack.append((m, s_m))
     runs = []
@@ -259,11 +274,14 @@ def find_blocks(
     candidates: NDArray[np.intp],
     blocks: list[StopBlock],
     failed: set[tuple[int, int, int]],
+    degenerate: list[tuple[int, float, float]] | None = None,
 ) -> list[StopBlock]:
     """New blocks about the leaves ``candidates`` (undecided, outside ``blocks``):
     for each, the coarsest box above it that meets the conditions of the module
     notes, traced; boxes whose trace failed are added to ``failed`` (keys
-    ``(level, anchor_0, anchor_1)``) and not traced again."""
+    ``(level, anchor_0, anchor_1)``) and not traced again, and where a trace
+    failed on a degenerate point (see :func:`trace_runs`), ``degenerate``
+    receives ``(stopped joint, stop, t)``."""
     if tree.ndim != 2 or not candidates.size:
         return []
     extent = np.left_shift(np.int64(1), np.asarray(tree.max_depth, dtype=np.int64))
@@ -328,9 +346,12 @@ def find_blocks(
         t = 1 - stopped
         stop = float(tree.hi[stopped] if side[j] else tree.lo[stopped])
         phi = _trace_function(distance, stopped, stop, bool(lower[j]))
-        runs = trace_runs(phi, float(lo[j, t]), float(hi[j, t]))
+        where: list[float] = []
+        runs = trace_runs(phi, float(lo[j, t]), float(hi[j, t]), where)
         if runs is None:
             failed.add(key)
+            if degenerate is not None and where:
+                degenerate.append((stopped, stop, where[0]))
             continue
         box = (a_lo.copy(), (a_hi - a_lo).copy(), lo[j].copy(), hi[j].copy())
         found.append(StopBlock(*box, stopped, stop, runs))
