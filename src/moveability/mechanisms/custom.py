@@ -97,6 +97,7 @@ import json
 import keyword
 import math
 import os
+import types
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
@@ -360,11 +361,17 @@ def _exact(value: Any) -> Interval:
     return Interval(v, v)
 
 
+def _body_code(body: str, n_args: int, key: str) -> types.CodeType:
+    """The code of ``def _g(_a0, ..., _a{n_args - 1}): return body``, to run in a
+    namespace of the guarded functions (or their mpmath counterparts)."""
+    source = f"def _g({', '.join(f'_a{i}' for i in range(n_args))}):\n    return {body}\n"
+    return compile(source, f"<{key}>", "exec")
+
+
 def _compile_body(body: str, n_args: int, key: str) -> Callable[..., Any]:
     """The function of ``_a0, ..., _a{n_args - 1}`` returning the printed ``body``
     (see :func:`compile_expression`)."""
-    source = f"def _g({', '.join(f'_a{i}' for i in range(n_args))}):\n    return {body}\n"
-    code = compile(source, f"<{key}>", "exec")
+    code = _body_code(body, n_args, key)
     float_ns: dict[str, Any] = dict(_FLOAT_NS)
     interval_ns: dict[str, Any] = dict(_INTERVAL_NS)
     trace_ns: dict[str, Any] = {name: tp.traced(f, name) for name, f in _COMMON.items()}
@@ -397,8 +404,7 @@ def _mp_function(body: str, n_args: int, values: Sequence[float], k: int) -> Cal
     """The printed ``body`` of ``(x_1, ..., x_k, q, *parameters)`` with the
     parameters bound, as ``h(q, ctx)`` in an mpmath interval context ``ctx``
     (the pose is given as 0: for bodies free of it, as the knees')."""
-    source = f"def _g({', '.join(f'_a{i}' for i in range(n_args))}):\n    return {body}\n"
-    code = compile(source, "<knee>", "exec")
+    code = _body_code(body, n_args, "knee")
     compiled: dict[int, Callable[..., Any]] = {}
 
     def h(q: Any, ctx: Any) -> Any:
