@@ -61,6 +61,7 @@ from ..intervals import Interval
 from ..mechanisms.base import Mechanism
 from ..types import Array
 from .flows import attached_nodes, face_neighbours, flow_directions
+from .joint_branches import BranchCondition, takes_branches
 from .stop_traces import StopBlock, block_labels, block_members, find_blocks
 
 __all__ = [
@@ -115,6 +116,18 @@ class JointSpaceCount:
     )
     #: lines on what the design is exactly degenerate at, where the count found it
     notes: tuple[str, ...] = ()
+    #: (m, 2) bool: which of the two configurations of each witness (see
+    #: :func:`witness_configurations`) lies in a region of its own; by default
+    #: both, but with constraints (see :mod:`moveability.analysis.joint_branches`)
+    #: each witness stands for one branch alone
+    witness_poses: NDArray[np.bool_] | None = field(default=None, compare=False)
+
+    @property
+    def witnessed(self) -> NDArray[np.bool_]:
+        """(m, 2) bool: :attr:`witness_poses`, both where not given."""
+        if self.witness_poses is not None:
+            return self.witness_poses
+        return np.ones((self.witnesses.shape[0], 2), dtype=bool)
 
     @property
     def decided(self) -> bool:
@@ -169,7 +182,8 @@ def joint_condition(mechanism: Mechanism) -> Any:
     bounds (``lower``, ``upper``), ``terms`` and ``classify``: the distance of
     the knees of two dyads (:func:`has_dyads`), or a mechanism's own
     ``joint_condition`` (the Delta); None for the others, or with constraints
-    beyond the paper's.
+    beyond the paper's that cannot be taken one branch at a time (see
+    :func:`~moveability.analysis.joint_branches.takes_branches`).
 
     Examples
     --------
@@ -178,7 +192,7 @@ def joint_condition(mechanism: Mechanism) -> Any:
     ['_Distance', 'Circumradius']
     """
     if not mechanism.restrictions.empty:
-        return None
+        return _Distance(mechanism) if takes_branches(mechanism) and has_dyads(mechanism) else None
     if has_dyads(mechanism):
         return _Distance(mechanism)
     own = getattr(mechanism, "joint_condition", None)
@@ -267,16 +281,14 @@ class _Distance:
         return np.where(inside, IN, np.where(outside, OUT, BOUNDARY)).astype(np.uint8)
 
 
-def _attached(
-    tree: HyperTree, leaves: Any, distance: Any, settled: NDArray[np.bool_]
-) -> NDArray[np.bool_]:
-    """The undecided leaves whose every point of D reaches an IN leaf within D
-    (``leaves`` are the tree's leaves), ``settled`` leaves taken as decided (those
-    of stop blocks: their points of D lie in certified pieces)."""
-    status = tree.status
-    rows = np.flatnonzero((status == BOUNDARY) & ~settled)
-    lo, hi = leaves.lo[rows], leaves.hi[rows]
-    k = tree.ndim
+def _flows(
+    distance: Any, lo: Array, hi: Array, branch: BranchCondition | None
+) -> tuple[NDArray[np.bool_], NDArray[np.uint8], bool]:
+    """The flows of the boxes ``lo``, ``hi`` of Q: (m, F) where each holds, (F, m)
+    the faces each leaves through, and whether the last constant one is the
+    convex (concave) test; with a ``branch``, its constraints kept too and two
+    flows along the level curves of d^2 after the constant ones."""
+    k = lo.shape[1]
     with np.errstate(invalid="ignore", over="ignore"):
         value, grad, second = distance.terms(lo, hi)
         high = value.hi >= distance.upper.lo  # may meet the upper bound
@@ -284,22 +296,79 @@ def _attached(
         vectors, exits = flow_directions(k)
         # the convex (concave) test of two joints, from the Hessian, when given
         hessian = k == 2 and len(second) == 3
-        n_flows = vectors.shape[0] + int(hessian)
-        ok = np.zeros((rows.size, n_flows), dtype=bool)
-        faces = np.zeros((n_flows, rows.size), dtype=np.uint8)
+        n_const = vectors.shape[0] + int(hessian)
+        # with a branch, two more: along the level curves of d^2
+        n_flows = n_const + (2 if branch is not None else 0)
+        ok = np.zeros((lo.shape[0], n_flows), dtype=bool)
+        faces = np.zeros((n_flows, lo.shape[0]), dtype=np.uint8)
         for f, (v, fl) in enumerate(zip(vectors, exits, strict=True)):
             rate = grad[0] * float(v[0])
             for axis in range(1, k):
                 rate = rate + grad[axis] * float(v[axis])
             ok[:, f] = (~high | (rate.hi <= 0)) & (~low | (rate.lo >= 0))
             faces[f] = sum(1 << j for j in fl)
+        if branch is not None:
+            ok[:, : vectors.shape[0]] &= branch.kept(lo, hi, vectors)
         if hessian:
             h11, h12, h22 = second
             det = h11 * h22 - h12 * h12
             convex = (h11.lo > 0) & (det.lo > 0)
             concave = (h11.hi < 0) & (det.lo > 0)
-            ok[:, -1] = (convex & ~high) | (concave & ~low)
-            faces[-1] = 0b1111
+            ok[:, n_const - 1] = (convex & ~high) | (concave & ~low)
+            if branch is not None:
+                ok[:, n_const - 1] &= branch.inside(lo, hi)
+            faces[n_const - 1] = 0b1111
+        if branch is not None:
+            ok[:, n_const:], faces[n_const:] = branch.level_flows(lo, hi, grad)
+    return ok, faces, hessian
+
+
+def _cached_flows(
+    tree: HyperTree,
+    leaves: Any,
+    rows: NDArray[np.intp],
+    distance: Any,
+    branch: BranchCondition | None,
+    cache: dict[bytes, tuple[NDArray[np.bool_], NDArray[np.uint8]]],
+) -> tuple[NDArray[np.bool_], NDArray[np.uint8], bool]:
+    """:func:`_flows` of the leaves ``rows``, each cell's computed once over the
+    rounds of one count (a cell's flows depend on its box alone); ``cache`` maps
+    a cell's anchor and level to its row of flows."""
+    keys = [
+        bytes(row)
+        for row in np.column_stack([tree.anchors[rows], tree.levels[rows]]).astype(np.int64)
+    ]
+    new = np.array([key not in cache for key in keys], dtype=bool)
+    fresh = np.flatnonzero(new)
+    ok, faces, hessian = _flows(distance, leaves.lo[rows[fresh]], leaves.hi[rows[fresh]], branch)
+    for j, i in enumerate(fresh):
+        cache[keys[i]] = (ok[j], faces[:, j])
+    if not rows.size:
+        return ok, faces, hessian
+    all_ok = np.stack([cache[key][0] for key in keys])
+    all_faces = np.stack([cache[key][1] for key in keys], axis=1)
+    return all_ok, all_faces, hessian
+
+
+def _attached(
+    tree: HyperTree,
+    leaves: Any,
+    distance: Any,
+    settled: NDArray[np.bool_],
+    branch: BranchCondition | None = None,
+    cache: dict[bytes, tuple[NDArray[np.bool_], NDArray[np.uint8]]] | None = None,
+) -> NDArray[np.bool_]:
+    """The undecided leaves whose every point of D reaches an IN leaf within D
+    (``leaves`` are the tree's leaves), ``settled`` leaves taken as decided (those
+    of stop blocks: their points of D lie in certified pieces); with a
+    ``branch``, of its D_s, the flows keeping its constraints too. The flows of
+    each cell are kept in ``cache`` over the rounds, where given."""
+    status = tree.status
+    rows = np.flatnonzero((status == BOUNDARY) & ~settled)
+    ok, faces, hessian = _cached_flows(
+        tree, leaves, rows, distance, branch, {} if cache is None else cache
+    )
+    n_flows = ok.shape[1]
     weights = np.left_shift(np.uint64(1), np.arange(n_flows, dtype=np.uint64))
     bits = (ok.astype(np.uint64) * weights).sum(axis=1, dtype=np.uint64)[:, None]
     nodes = np.stack([rows, np.zeros_like(rows)], axis=1)
@@ -318,14 +387,18 @@ def _attached(
         attached |= found
         if not hessian:
             return attached
-        blocks = _convex_blocks(tree, distance, neighbours, done | attached)
+        blocks = _convex_blocks(tree, distance, neighbours, done | attached, branch)
         if not blocks.any():
             return attached
         attached |= blocks
 
 
 def _convex_blocks(
-    tree: HyperTree, distance: _Distance, neighbours: Any, done: NDArray[np.bool_]
+    tree: HyperTree,
+    distance: _Distance,
+    neighbours: Any,
+    done: NDArray[np.bool_],
+    branch: BranchCondition | None = None,
 ) -> NDArray[np.bool_]:
     """Leaves not done that lie in a box B of a coarser level over which ``d^2`` is
     convex (concave) and meets only the lower (upper) bound, when every leaf
@@ -361,7 +434,11 @@ def _convex_blocks(
     stops = np.ones(tree.ndim, dtype=bool)
     stops[list(tree.periodic)] = False
     on_stop = ((b_lo == 0) | (b_hi == extent))[:, stops].any(axis=1)
-    for j in np.flatnonzero((convex | concave) & ~on_stop):
+    usable = (convex | concave) & ~on_stop
+    if branch is not None and usable.any():
+        # the ray argument knows d^2 alone: the constraints must hold over all B
+        usable[usable] = branch.inside(lo[usable], hi[usable])
+    for j in np.flatnonzero(usable):
         if out[leaf[j]]:
             continue
         inside = ((anchors >= b_lo[j]) & (ends <= b_hi[j])).all(axis=1)
@@ -528,6 +605,8 @@ def count_in_joint_space(
     distance = joint_condition(mechanism)
     if distance is None:
         return None
+    if not mechanism.restrictions.empty:
+        return _count_branches(mechanism, distance, max_depth, max_leaves)
     exact = mechanism.exact_region_count() if closed_form else None
     if exact is not None:
         # D decided in closed form (the biglide's bands)
@@ -552,14 +631,45 @@ def count_in_joint_space(
     return found
 
 
+def _count_branches(
+    mechanism: Mechanism, distance: Any, max_depth: int | None, max_leaves: int | None
+) -> JointSpaceCount:
+    """:func:`count_in_joint_space` with constraints: the components of D_+ and of
+    D_- (see :mod:`moveability.analysis.joint_branches`), each witness standing
+    for its own branch."""
+    branches = [BranchCondition(mechanism, distance, s) for s in (1, -1)]
+    found = [_count(mechanism, distance, max_depth, max_leaves, False, b) for b in branches]
+    tops = [c.at_most for c in found]
+    k = len(mechanism.limits)
+    witnesses = np.concatenate([c.witnesses.reshape(-1, k) for c in found])
+    first = found[0].witnesses.reshape(-1, k).shape[0]
+    poses = np.zeros((witnesses.shape[0], 2), dtype=bool)
+    poses[:first, 0] = True
+    poses[first:, 1] = True
+    return JointSpaceCount(
+        at_least=sum(c.at_least for c in found),
+        at_most=None if None in tops else sum(t for t in tops if t is not None),
+        leaves=sum(c.leaves for c in found),
+        open_measure=sum(c.open_measure for c in found),
+        witnesses=witnesses,
+        witness_poses=poses,
+    )
+
+
 def _count(
     mechanism: Mechanism,
     distance: Any,
     max_depth: int | None,
     max_leaves: int | None,
     stop_traces: bool,
+    branch: BranchCondition | None = None,
 ) -> JointSpaceCount:
-    """:func:`count_in_joint_space` on the tree of Q, with or without stop traces."""
+    """:func:`count_in_joint_space` on the tree of Q, with or without stop traces;
+    with a ``branch``, the components of its D_s (counted once, not twice)."""
+    condition = distance if branch is None else branch
+    copies = 2 if branch is None else 1
+    # the flows of each cell, found once over the rounds
+    cache: dict[bytes, tuple[NDArray[np.bool_], NDArray[np.uint8]]] = {}
     lo, hi, periodic = _joint_box(mechanism)
     k = lo.size
     if max_leaves is None:
@@ -569,7 +679,7 @@ def _count(
     tree = HyperTree.build(
         lo,
         hi,
-        distance.classify,
+        condition.classify,
         max_depth=max_depth,
         periodic=periodic,
         merge=False,
@@ -585,7 +695,7 @@ def _count(
         member = block_members(tree, blocks)
         settled = member >= 0
         undecided = (tree.status == BOUNDARY) & ~settled
-        loose = undecided & ~_attached(tree, leaves, distance, settled)
+        loose = undecided & ~_attached(tree, leaves, distance, settled, branch, cache)
         # closed cells touching at a corner: the IN ones share a point of D (open)
         if blocks:
             pairs = adjacency(tree, status=IN | BOUNDARY, connectivity=k)
@@ -627,12 +737,12 @@ def _count(
         room = (max_leaves - len(tree)) // ((1 << k) - 1)
         if at_least == at_most or not mask.any() or int(mask.sum()) > room:
             return JointSpaceCount(
-                at_least=2 * at_least,
-                at_most=None if at_most is None else 2 * at_most,
+                at_least=copies * at_least,
+                at_most=None if at_most is None else copies * at_most,
                 leaves=len(tree),
                 open_measure=open_measure,
                 witnesses=_witnesses(leaves, volumes, certain, n_certain, blocks, distance),
                 notes=_degenerate_notes(mechanism, leaves.lo[still], leaves.hi[still], hi - lo)
                 or _trace_notes(mechanism, degenerate, at_least == at_most),
             )
-        tree = tree.refine(mask, distance.classify)
+        tree = tree.refine(mask, condition.classify)

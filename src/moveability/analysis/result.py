@@ -277,12 +277,8 @@ def analyze(
         raise InvalidParameterError("resolve_growth", "a number >= 0", resolve_growth)
     # the levels below the precision must fit in the keys too
     # two dyads, the Delta: the count is also proved in the joint space (see
-    # joint_space), which knows the paper's hypotheses only
-    in_joints = (
-        not generalized_aspects
-        and mechanism.restrictions.empty
-        and joint_condition(mechanism) is not None
-    )
+    # joint_space; with constraints, one branch at a time: joint_branches)
+    in_joints = not generalized_aspects and joint_condition(mechanism) is not None
     # without flows (legs given by constraints alone) no refinement can prove a
     # bound, but the joint space's count may, and its regions are listed then
     resolve = bool(resolve) and (supports_flows(mechanism) or in_joints)
@@ -350,7 +346,10 @@ def analyze(
             precision,
         ) from None
     joint = None
-    if resolve and in_joints:
+    # with constraints the joint space's count costs more than the workspace's
+    # often does: it is sought only where the workspace leaves the count open
+    later = resolve and in_joints and not mechanism.restrictions.empty
+    if resolve and in_joints and not later:
         phase(progress, "counting the regions in the joint space")
         joint = count_in_joint_space(mechanism)
     phase(progress, "joining the regions")
@@ -362,11 +361,32 @@ def analyze(
         table=_leaf_table(mechanism, tree, kept),
         joint_count=joint,
     )
+    budget = min(max_leaves, len(tree) + max(int(resolve_growth * len(tree)), 1 << 15))
     if extra:
-        budget = len(tree) + max(int(resolve_growth * len(tree)), 1 << 15)
         # the pass's analysis is no one else's: the rounds may shed it
-        result = _resolve_rounds(result, min(max_leaves, budget), progress, owned=True)
+        result = _resolve_rounds(result, budget, progress, owned=True)
+    if later and result.count[0] != result.count[1]:
+        phase(progress, "counting the regions in the joint space")
+        joint = count_in_joint_space(mechanism)
+        if joint is not None:
+            result = _with_joint_count(result, joint)
+            if extra:
+                result = _resolve_rounds(result, budget, progress, owned=True)
     return result
+
+
+def _with_joint_count(result: Analysis, joint: JointSpaceCount) -> Analysis:
+    """The analysis ``result`` with the joint-space count ``joint``: the same tree,
+    table and flows (taken from ``result``, each leaf its own)."""
+    return Analysis(
+        result.mechanism,
+        result.precision,
+        result.tree,
+        generalized_aspects=result.generalized_aspects,
+        table=result.table,
+        flows_of=(result, np.arange(len(result.tree), dtype=np.intp)),
+        joint_count=joint,
+    )
 
 
 #: the most leaves an analysis holds, whatever the memory
@@ -1386,7 +1406,7 @@ class Analysis:
         poses, signs = witness_configurations(m, joint.witnesses)
         q = np.repeat(joint.witnesses, 2, axis=0)
         points = poses.reshape(q.shape[0], -1)
-        found = np.isfinite(points).all(axis=1) & (signs.ravel() != 0)
+        found = np.isfinite(points).all(axis=1) & (signs.ravel() != 0) & joint.witnessed.ravel()
         q, points = q[found], points[found]
         if not points.size:
             return none, none, np.zeros(0, dtype=bool)

@@ -86,6 +86,7 @@ def save_analysis(result: Analysis, path: str | os.PathLike[str]) -> None:
         arrays["joint_open_measure"] = np.array(count.open_measure)
         arrays["joint_witnesses"] = np.asarray(count.witnesses, dtype=np.float64)
         arrays["joint_notes"] = np.array(count.notes, dtype=np.str_)
+        arrays["joint_witness_poses"] = np.asarray(count.witnessed, dtype=bool)
     arrays["digest"] = np.array(_digest(arrays))
     arrays["format"] = np.array(FORMAT)
     arrays["version"] = np.array(FORMAT_VERSION)
@@ -163,6 +164,11 @@ def _rebuild(arrays: dict[str, NDArray[Any]]) -> Analysis:
         witnesses = np.asarray(arrays.get("joint_witnesses", np.zeros((0, 0))), dtype=np.float64)
         if witnesses.ndim != 2 or (witnesses.size and witnesses.shape[1] != len(mechanism.limits)):
             raise ValueError("bad witnesses of the joint-space count")
+        witnessed = np.asarray(
+            arrays.get("joint_witness_poses", np.ones((witnesses.shape[0], 2))), dtype=bool
+        )
+        if witnessed.shape != (witnesses.shape[0], 2):
+            raise ValueError("bad witnesses of the joint-space count")
         joint = JointSpaceCount(
             at_least,
             None if at_most < 0 else at_most,
@@ -170,6 +176,7 @@ def _rebuild(arrays: dict[str, NDArray[Any]]) -> Analysis:
             float(arrays["joint_open_measure"]),
             witnesses,
             tuple(str(v) for v in np.atleast_1d(arrays.get("joint_notes", np.zeros(0, np.str_)))),
+            witnessed,
         )
     eps = arrays["precision"]
     precision = float(eps[0]) if (eps == eps[0]).all() else tuple(float(v) for v in eps)
