@@ -107,13 +107,14 @@ class BranchCondition:
     --------
     >>> import numpy as np
     >>> from moveability.analysis.joint_space import joint_condition
+    >>> from moveability.hypertree.status import IN, OUT
     >>> from moveability.mechanisms import FiveBar
     >>> from moveability.mechanisms.constraints import Constraints
-    >>> m = FiveBar(7, 8, 5, 8, 5).constrained(
+    >>> m = FiveBar(7, 6, 5, 6, 4).constrained(
     ...     Constraints.from_spec({"obstacles": [{"center": [3.5, 9.0], "radius": 1.0}]}))
     >>> up, down = (BranchCondition(m, joint_condition(m), s) for s in (1, -1))
-    >>> q = np.array([[1.2, 2.0]])  # P above the base line on one branch only
-    >>> [int(b.classify(q, q)[0]) for b in (up, down)] == [0, 1]
+    >>> q = np.array([[0.6, 1.5]])  # one branch's distal link meets the disk
+    >>> [up.classify(q, q)[0], down.classify(q, q)[0]] == [OUT, IN]
     True
     """
 
