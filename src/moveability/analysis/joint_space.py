@@ -281,6 +281,11 @@ class _Distance:
         return np.where(inside, IN, np.where(outside, OUT, BOUNDARY)).astype(np.uint8)
 
 
+#: the flows of the cells of Q met in one count: (anchor, level) -> (which hold,
+#: their exit faces)
+_FlowCache = dict[bytes, tuple[NDArray[np.bool_], NDArray[np.uint8]]]
+
+
 def _flows(
     distance: Any, lo: Array, hi: Array, branch: BranchCondition | None
 ) -> tuple[NDArray[np.bool_], NDArray[np.uint8], bool]:
@@ -329,7 +334,7 @@ def _cached_flows(
     rows: NDArray[np.intp],
     distance: Any,
     branch: BranchCondition | None,
-    cache: dict[bytes, tuple[NDArray[np.bool_], NDArray[np.uint8]]],
+    cache: _FlowCache,
 ) -> tuple[NDArray[np.bool_], NDArray[np.uint8], bool]:
     """:func:`_flows` of the leaves ``rows``, each cell's computed once over the
     rounds of one count (a cell's flows depend on its box alone); ``cache`` maps
@@ -356,7 +361,7 @@ def _attached(
     distance: Any,
     settled: NDArray[np.bool_],
     branch: BranchCondition | None = None,
-    cache: dict[bytes, tuple[NDArray[np.bool_], NDArray[np.uint8]]] | None = None,
+    cache: _FlowCache | None = None,
 ) -> NDArray[np.bool_]:
     """The undecided leaves whose every point of D reaches an IN leaf within D
     (``leaves`` are the tree's leaves), ``settled`` leaves taken as decided (those
@@ -669,7 +674,7 @@ def _count(
     condition = distance if branch is None else branch
     copies = 2 if branch is None else 1
     # the flows of each cell, found once over the rounds
-    cache: dict[bytes, tuple[NDArray[np.bool_], NDArray[np.uint8]]] = {}
+    cache: _FlowCache = {}
     lo, hi, periodic = _joint_box(mechanism)
     k = lo.size
     if max_leaves is None:
