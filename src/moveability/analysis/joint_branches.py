@@ -22,7 +22,7 @@ gives what the quadtree count of Q needs for one D_s:
   constraints by :class:`~moveability.mechanisms.constraints.ConstraintMargins`
   over those); OUT where d^2 is certainly outside or some constraint certainly
   fails, or no configuration of the branch's sign of det A satisfies them;
-* ``kept``: for each constant direction v of Q, where moving along v keeps
+* ``flows``: for each constant direction v of Q, where moving along v keeps
   every constraint that may be active in the cell. The platform point moves at
   ``P' = adj(M) r / det M``, from differentiating ``|P - C_i|^2 = b_i^2``: the
   rows of M are ``e_i = P - C_i`` and ``r_i = e_i . C_i'``; ``det M = s h |d|``,
@@ -39,7 +39,8 @@ gives what the quadtree count of Q needs for one D_s:
   the singularity can still certify that a thin valid sliver next to it joins
   the rest;
 * ``inside``: where every constraint certainly holds, so that a convex block of
-  d^2 needs nothing more.
+  d^2 needs nothing more (``flows`` gives all three with the constraints
+  enclosed once).
 """
 
 from __future__ import annotations
@@ -143,20 +144,6 @@ class BranchCondition:
         signs = np.unique(np.sign(det[np.isfinite(det) & (det != 0)]))
         return int(signs[0]) if signs.size == 1 else 0
 
-    def terms(
-        self, lo: Array, hi: Array, hessian: bool = True
-    ) -> tuple[Interval, list[Interval], list[Interval]]:
-        """The distance's ``terms`` (d^2, its gradient and Hessian)."""
-        result: tuple[Interval, list[Interval], list[Interval]] = self.distance.terms(
-            lo, hi, hessian
-        )
-        return result
-
-    def poses(self, joints: Array) -> NDArray[np.float64]:
-        """The distance's ``poses`` (both branches)."""
-        out: NDArray[np.float64] = self.distance.poses(joints)
-        return out
-
     def _point(self, knees: list[_Point], dist2: Interval) -> tuple[_Point, Interval]:
         """The branch's platform point and ``det M = s h |d|`` from the knees and
         their squared distance (natural enclosures)."""
@@ -255,7 +242,20 @@ class BranchCondition:
             margins, _ = self._margins(lo, hi)
         return np.asarray(margins.codes == INSIDE)
 
-    def kept(self, lo: Array, hi: Array, vectors: Array) -> NDArray[np.bool_]:
+    def flows(
+        self, lo: Array, hi: Array, vectors: Array, dist2: Interval, grad: list[Interval]
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_], NDArray[np.uint8]]:
+        """All that the count asks of the boxes at once, the constraints enclosed
+        once: (n, len(vectors)) where moving along each constant direction keeps
+        them (:meth:`_kept`), (n,) where they all hold (:meth:`inside`), and the
+        level flows with their exit faces (:meth:`level_flows`); ``dist2`` and
+        ``grad`` are d^2 and its gradient over the boxes."""
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            margins, frame = self._margins(lo, hi)
+            level, faces = self._level(margins, frame, dist2, grad)
+            return self._kept(margins, frame, vectors), margins.codes == INSIDE, level, faces
+
+    def _kept(self, margins: ConstraintMargins, frame: Any, vectors: Array) -> NDArray[np.bool_]:
         """(n, len(vectors)): where moving the joints along each direction keeps
         every constraint that may be active over the box (see the module's notes).
 
@@ -264,32 +264,27 @@ class BranchCondition:
         multiplied by ``|det M| = s det M`` (the rates are linear in the
         velocities, so their signs are those of the configurations'; bounded near
         a parallel singularity, where the first form is not)."""
-        n = lo.shape[0]
+        knees, rates, point, det, p_lo, p_hi, angles = frame
+        n = p_lo.shape[0]
         out = np.ones((n, vectors.shape[0]), dtype=bool)
-        if not n:
-            return out
         m = self.mechanism
         s = float(self.branch)
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            margins, (knees, rates, point, det, p_lo, p_hi, angles) = self._margins(lo, hi)
-            xs, ys = self._moments(point, knees, rates)
-            scale = det * s
-            for f, v in enumerate(vectors):
-                px = xs[0] * float(v[0]) + xs[1] * float(v[1])
-                py = ys[0] * float(v[0]) + ys[1] * float(v[1])
-                plain = m.linkage_velocities(
-                    p_lo,
-                    p_hi,
-                    angles,
-                    [px / det, py / det],
-                    [Interval(np.full(n, float(v[i]))) for i in range(2)],
-                )
-                scaled = m.linkage_velocities(
-                    p_lo, p_hi, angles, [px * s, py * s], [scale * float(v[i]) for i in range(2)]
-                )
-                out[:, f] = margins.kept(plain, self.det_sign) | margins.kept(
-                    scaled, self.det_sign
-                )
+        xs, ys = self._moments(point, knees, rates)
+        scale = det * s
+        for f, v in enumerate(vectors):
+            px = xs[0] * float(v[0]) + xs[1] * float(v[1])
+            py = ys[0] * float(v[0]) + ys[1] * float(v[1])
+            plain = m.linkage_velocities(
+                p_lo,
+                p_hi,
+                angles,
+                [px / det, py / det],
+                [Interval(np.full(n, float(v[i]))) for i in range(2)],
+            )
+            scaled = m.linkage_velocities(
+                p_lo, p_hi, angles, [px * s, py * s], [scale * float(v[i]) for i in range(2)]
+            )
+            out[:, f] = margins.kept(plain, self.det_sign) | margins.kept(scaled, self.det_sign)
         return out
 
     def level_flows(
@@ -307,28 +302,32 @@ class BranchCondition:
         perp(P - C_1)``, ``w = (d x d') / d^2``. A flow counts where one joint
         certainly moves one way (it leaves the box).
         """
-        n = lo.shape[0]
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            margins, frame = self._margins(lo, hi)
+            dist2, _, _ = self.distance.terms(lo, hi, hessian=False)
+            return self._level(margins, frame, dist2, grad)
+
+    def _level(
+        self, margins: ConstraintMargins, frame: Any, dist2: Interval, grad: list[Interval]
+    ) -> tuple[NDArray[np.bool_], NDArray[np.uint8]]:
+        """:meth:`level_flows` from the constraints and the frame over the boxes."""
+        knees, rates, point, _, p_lo, p_hi, angles = frame
+        n = p_lo.shape[0]
         ok = np.zeros((n, 2), dtype=bool)
         faces = np.zeros((2, n), dtype=np.uint8)
-        if not n:
-            return ok, faces
-        m = self.mechanism
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            margins, (knees, rates, point, _, p_lo, p_hi, angles) = self._margins(lo, hi)
-            dist2, _, _ = self.distance.terms(lo, hi, hessian=False)
-            for f, way in enumerate((1.0, -1.0)):
-                t, (px, py) = self.level_velocity(knees, rates, point, dist2, grad, way)
-                velocities = m.linkage_velocities(p_lo, p_hi, angles, [px, py], t)
-                leaves = np.zeros(n, dtype=bool)
-                bits = np.zeros(n, dtype=np.uint8)
-                for axis in range(2):
-                    up, down = t[axis].lo > 0, t[axis].hi < 0
-                    leaves |= up | down
-                    still = (t[axis].lo == 0) & (t[axis].hi == 0)
-                    bits |= np.where(up | ~(down | still), 1 << (2 * axis), 0).astype(np.uint8)
-                    bits |= np.where(down | ~(up | still), 1 << (2 * axis + 1), 0).astype(np.uint8)
-                ok[:, f] = leaves & (dist2.lo > 0) & margins.kept(velocities, self.det_sign)
-                faces[f] = bits
+        for f, way in enumerate((1.0, -1.0)):
+            t, (px, py) = self.level_velocity(knees, rates, point, dist2, grad, way)
+            velocities = self.mechanism.linkage_velocities(p_lo, p_hi, angles, [px, py], t)
+            leaves = np.zeros(n, dtype=bool)
+            bits = np.zeros(n, dtype=np.uint8)
+            for axis in range(2):
+                up, down = t[axis].lo > 0, t[axis].hi < 0
+                leaves |= up | down
+                still = (t[axis].lo == 0) & (t[axis].hi == 0)
+                bits |= np.where(up | ~(down | still), 1 << (2 * axis), 0).astype(np.uint8)
+                bits |= np.where(down | ~(up | still), 1 << (2 * axis + 1), 0).astype(np.uint8)
+            ok[:, f] = leaves & (dist2.lo > 0) & margins.kept(velocities, self.det_sign)
+            faces[f] = bits
         return ok, faces
 
     @staticmethod

@@ -312,19 +312,20 @@ def _flows(
                 rate = rate + grad[axis] * float(v[axis])
             ok[:, f] = (~high | (rate.hi <= 0)) & (~low | (rate.lo >= 0))
             faces[f] = sum(1 << j for j in fl)
-        if branch is not None:
-            ok[:, : vectors.shape[0]] &= branch.kept(lo, hi, vectors)
+        # the constraints allow every flow where they all hold (and no box is asked)
+        inside = np.ones(lo.shape[0], dtype=bool)
+        if branch is not None and lo.shape[0]:
+            kept, inside, level, level_faces = branch.flows(lo, hi, vectors, value, grad)
+            ok[:, : vectors.shape[0]] &= kept
+            ok[:, n_const:], faces[n_const:] = level, level_faces
         if hessian:
             h11, h12, h22 = second
             det = h11 * h22 - h12 * h12
             convex = (h11.lo > 0) & (det.lo > 0)
             concave = (h11.hi < 0) & (det.lo > 0)
             ok[:, n_const - 1] = (convex & ~high) | (concave & ~low)
-            if branch is not None:
-                ok[:, n_const - 1] &= branch.inside(lo, hi)
+            ok[:, n_const - 1] &= inside
             faces[n_const - 1] = 0b1111
-        if branch is not None:
-            ok[:, n_const:], faces[n_const:] = branch.level_flows(lo, hi, grad)
     return ok, faces, hessian
 
 
